@@ -1,0 +1,1 @@
+"""The ``tiremodal`` command line: one thin module per command."""

@@ -1,0 +1,134 @@
+"""``tiremodal simulate``: a physics-true roving-hammer test and its truth file."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import click
+import numpy as np
+
+from ..config import load_mapping
+from ..effects import EFFECTS
+from ..errors import ParameterError
+from ..files import atomic_path, check_overwrite
+from ..measurement import write_measurement
+from ..model import TyreParameters
+from ..simulate import Channel, Faults, SimulationConfig, simulate
+from .main import cli
+from .options import Progress, dumps, echo_json, json_option, overwrite_option, parse_key_values
+
+_SCALARS = {f.name for f in dataclasses.fields(SimulationConfig)} - {"params", "effects", "faults", "channels"}
+
+
+def _pairs(values, n, what):
+    out = []
+    for v in values:
+        parts = v.split(":")
+        if len(parts) != n:
+            raise click.BadParameter(f"{v!r} must have {n} fields separated by ':'", param_hint=what)
+        try:
+            out.append(tuple(int(x) for x in parts[:2]) + tuple(parts[2:]))
+        except ValueError:
+            raise click.BadParameter(f"{v!r}: point and hit must be integers", param_hint=what) from None
+    return tuple(out)
+
+
+def _effects(specs) -> dict:
+    out = {}
+    for spec in specs:
+        name, _, rest = spec.partition(":")
+        if name not in EFFECTS:
+            raise click.BadParameter(f"unknown effect {name!r}; allowed: {', '.join(EFFECTS)}",
+                                     param_hint="--effect")
+        vals = parse_key_values([x for x in rest.split(",") if x], "--effect") if rest else {}
+        try:
+            out[name] = {k: float(v) for k, v in vals.items()}
+        except ValueError:
+            raise click.BadParameter(f"{spec!r}: values must be numbers", param_hint="--effect") from None
+    return out
+
+
+def build_config(config_file, overrides: dict, params: dict, effects: dict, faults: dict) -> SimulationConfig:
+    """Merge a TOML/JSON file with command-line values into a SimulationConfig."""
+    data = load_mapping(config_file) if config_file else {}
+    unknown = sorted(set(data) - _SCALARS - {"params", "effects", "faults", "channels"})
+    if unknown:
+        raise ParameterError(f"{config_file}: unknown key {unknown[0]!r}; allowed: "
+                             f"{', '.join(sorted(_SCALARS | {'params', 'effects', 'faults', 'channels'}))}")
+    scal = {k: v for k, v in data.items() if k in _SCALARS}
+    scal.update({k: v for k, v in overrides.items() if v is not None})
+    p = TyreParameters.from_mapping({**data.get("params", {}), **params})
+    eff = {**data.get("effects", {}), **effects}
+    fd = {**data.get("faults", {}), **{k: v for k, v in faults.items() if v}}
+    try:
+        flt = Faults(double_hits=tuple(tuple(int(x) for x in v) for v in fd.get("double_hits", ())),
+                     clipped=tuple((int(a), int(b), str(c)) for a, b, c in fd.get("clipped", ())),
+                     dead_channel=fd.get("dead_channel"), missing_point=fd.get("missing_point"))
+        chans = tuple(Channel(c["name"], c["location"], np.deg2rad(float(c.get("angle_deg", 0.0))))
+                      for c in data.get("channels", ())) or SimulationConfig().channels
+    except (TypeError, ValueError, KeyError) as exc:
+        raise ParameterError(f"{config_file}: malformed faults or channels ({exc})") from None
+    return SimulationConfig(params=p, effects=eff, faults=flt, channels=chans, **scal)
+
+
+@cli.command("simulate")
+@click.argument("output", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--config", "config_file", type=click.Path(exists=True, dir_okay=False),
+              help="TOML/JSON file: scalars, [params], [effects.NAME], [faults], [[channels]].")
+@click.option("--truth", type=click.Path(dir_okay=False, path_type=Path),
+              help="Truth JSON (default: OUTPUT with suffix .truth.json).")
+@click.option("--seed", type=int, help="Random seed (default 0).")
+@click.option("--points", "n_points", type=click.IntRange(2), help="Impact points (default 34).")
+@click.option("--hits", "n_hits", type=click.IntRange(1, 100), help="Hits per point (default 3).")
+@click.option("--sample-rate", type=click.FloatRange(min=1, min_open=False), help="Hz (default 2048).")
+@click.option("--samples", "n_samples", type=click.IntRange(64), help="Samples per record (default 4096).")
+@click.option("--noise", type=click.FloatRange(0), help="Sensor noise, std relative to each record's RMS.")
+@click.option("--damping", type=click.FloatRange(0, 1, min_open=True, max_open=True),
+              help="One modal damping ratio for all modes (default: the paper's, 1.6–3.8 %).")
+@click.option("--n-max", type=click.IntRange(1), help="Highest circumferential order (default 30).")
+@click.option("--param", "params", multiple=True, metavar="NAME=VALUE",
+              help="Model parameter, e.g. k_r1=6.7e6 or m_w=clamped (repeatable).")
+@click.option("--effect", "effects", multiple=True, metavar="NAME[:P=V,...]",
+              help=f"Switch on an extra effect: {', '.join(EFFECTS)} (repeatable).")
+@click.option("--double-hit", multiple=True, metavar="POINT:HIT", help="Inject a double hit.")
+@click.option("--clip", multiple=True, metavar="POINT:HIT:CHANNEL", help="Clip a record ('force' or a channel).")
+@click.option("--dead-channel", help="Make this response channel dead.")
+@click.option("--missing-point", type=int, help="Leave this point out of the file.")
+@click.option("--dtype", type=click.Choice(["float32", "float64"]), help="Sample type (default float32).")
+@click.option("--compress", is_flag=True, help="gzip the records (smaller, slower).")
+@overwrite_option
+@json_option
+def simulate_cmd(output, config_file, truth, seed, n_points, n_hits, sample_rate, n_samples, noise,
+                 damping, n_max, params, effects, double_hit, clip, dead_channel, missing_point, dtype,
+                 compress, overwrite, as_json):
+    """Simulate a roving-hammer test of the tyre model into OUTPUT (HDF5).
+
+    Writes OUTPUT and a truth JSON beside it: every mode below Nyquist with n, branch,
+    frequency, damping and shape, the parameters, effects and faults injected.
+    """
+    overrides = dict(seed=seed, n_points=n_points, n_hits=n_hits, sample_rate=sample_rate,
+                     n_samples=n_samples, noise=noise, damping=damping, n_max=n_max, dtype=dtype)
+    faults = dict(double_hits=_pairs(double_hit, 2, "--double-hit"), clipped=_pairs(clip, 3, "--clip"),
+                  dead_channel=dead_channel, missing_point=missing_point)
+    cfg = build_config(config_file, overrides, parse_key_values(params, "--param"), _effects(effects), faults)
+    truth = truth or output.with_suffix(".truth.json")
+    check_overwrite(output, overwrite)
+    check_overwrite(truth, overwrite)
+    bar = Progress("simulating")
+    sim = simulate(cfg, progress=bar)
+    bar.close()
+    with atomic_path(truth, overwrite=overwrite) as tmp_truth:
+        tmp_truth.write_text(dumps(sim.truth), encoding="utf-8")
+        write_measurement(output, sim.measurement, overwrite=overwrite,
+                          compression="gzip" if compress else None)
+    summary = {"output": str(output), "truth": str(truth), "n_points": sim.measurement.n_points,
+               "n_hits": sim.measurement.n_hits, "n_channels": sim.measurement.n_channels,
+               "n_samples": sim.measurement.n_samples, "sample_rate": sim.measurement.sample_rate,
+               "n_modes_below_nyquist": len(sim.truth["modes"]), "faults": sim.truth["faults"]}
+    if as_json:
+        echo_json(summary)
+    else:
+        click.echo(f"wrote {output} ({summary['n_points']} points × {summary['n_hits']} hits × "
+                   f"{summary['n_channels']} channels) and {truth}", err=True)

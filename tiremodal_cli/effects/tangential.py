@@ -1,0 +1,45 @@
+"""Tangential coupling of an inextensible tread.
+
+An inextensible ring ties tangential to radial motion: ∂v/∂θ = −u, so for
+u = U cos nθ the tangential displacement is v = −(U/n) sin nθ (n ≥ 1). Its kinetic
+energy adds a tangential inertia ρA/n², and a tangential sidewall stiffness k_t acting
+on v adds k_t/n², both on the tread coordinate::
+
+    M_UU = ρA (1 + c_t / n²),   K_UU = K_n + k_t / n²
+
+``c_t`` (0 … 1) is the participating fraction of the tangential inertia (1 for a fully
+inextensible tread). n = 0 is left unchanged (an inextensible ring cannot breathe; the
+seed model's n = 0 stands for the extensible limit).
+
+Residual signature: strongest at low n: n = 1, 2 pulled down by the inertia and lifted
+by k_t; vanishes as 1/n².
+Source: Kung, Soedel & Yang 1986; Huang & Soedel 1987.
+"""
+
+import numpy as np
+
+from . import Block, Effect, Param
+
+
+def _modify(n, block: Block, v, p, freq_hz=None) -> Block:
+    if n == 0:
+        return block
+    M = np.array(block.M, dtype=float)
+    K = np.array(block.K, dtype=float)
+    i = block.dofs.index("U")
+    M[i, i] += p.rhoA * v["c_t"] / n**2
+    K[i, i] += v["k_t"] / n**2
+    return Block(M, K, block.dofs)
+
+
+EFFECT = Effect(
+    name="tangential",
+    title="tangential inertia and stiffness of an inextensible tread ∝ 1/n²",
+    parameters=(Param("c_t", 1.0, 0.0, 1.0, "1",
+                      "participating fraction of the tangential inertia ρA/n²"),
+                Param("k_t", 2.0e6, 0.0, 5.0e7, "N/m²",
+                      "tangential sidewall stiffness per length (enters as k_t/n²)")),
+    signature="strongest at n = 1, 2, decaying as 1/n²; both branches",
+    modify_block=_modify,
+    reference="Kung, Soedel & Yang 1986; Huang & Soedel 1987",
+)

@@ -1,0 +1,65 @@
+"""Safe file output: atomic writes, an overwrite guard, checksums.
+
+Every output is written under a temporary name in the target folder and renamed into
+place only when complete (``os.replace`` is atomic on POSIX and Windows within one
+file system), so an interrupted run never leaves a half-written result behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+from .errors import OutputExistsError, ParameterError
+
+__all__ = ["atomic_path", "check_overwrite", "sha256_file", "write_text_atomic"]
+
+
+def check_overwrite(path: str | os.PathLike, overwrite: bool) -> Path:
+    """Refuse an existing output unless ``overwrite`` is true; return the path."""
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise OutputExistsError(f"output {str(path)!r} exists; pass --overwrite to replace it")
+    return path
+
+
+@contextlib.contextmanager
+def atomic_path(target: str | os.PathLike, *, overwrite: bool = False) -> Iterator[Path]:
+    """Yield a temporary path beside ``target``; rename it into place on success.
+
+    On any exception the temporary file is removed and ``target`` is left untouched.
+    """
+    target = check_overwrite(target, overwrite)
+    folder = target.parent if str(target.parent) else Path(".")
+    if not folder.is_dir():
+        raise ParameterError(f"output folder {str(folder)!r} does not exist; create it first")
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=folder)
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        os.replace(tmp_path, target)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            tmp_path.unlink()
+        raise
+
+
+def write_text_atomic(target: str | os.PathLike, text: str, *, overwrite: bool = False) -> Path:
+    """Write ``text`` (UTF-8) to ``target`` atomically; return the target path."""
+    with atomic_path(target, overwrite=overwrite) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return Path(target)
+
+
+def sha256_file(path: str | os.PathLike, *, chunk: int = 1 << 20) -> str:
+    """Hex SHA-256 of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        while block := fh.read(chunk):
+            h.update(block)
+    return h.hexdigest()

@@ -1,0 +1,409 @@
+"""The flexible-beam-on-modified-elastic-foundation tyre model (``docs/model.md``).
+
+Tread: an Euler beam under inflation tension; sidewall: a distributed mass on two radial
+springs; rim: rigid, coupled to n = 1 only. With u = U cos nθ the tread stiffness of
+order n is ``K_n = EI n⁴/R⁴ + P0 b n²/R + k_r1`` and every order is a small eigenproblem
+(2 × 2, or 3 × 3 for n = 1 with a finite rim mass). Candidate effects
+(:mod:`tiremodal_cli.effects`) change those blocks or couple them.
+
+Generalised coordinates: for each order n = 0 … n_max and harmonic ("cos", "sin"; n = 0
+has "cos" only) the block's coordinates (U, S, [W], [A]) in m. The generalised mass and
+stiffness are the per-length blocks times ∫cos² nθ R dθ = π R (2π R for n = 0), so
+shapes normalised to unit generalised mass give receptances in m/N directly.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from .effects import Block, resolve_effects
+from .errors import ParameterError
+
+__all__ = ["TyreParameters", "PAPER_PARAMETERS", "ModalModel", "block", "closed_form_hz",
+           "solve_modes", "observation", "frf", "paper_damping", "FRF_FORMS"]
+
+FRF_FORMS = ("receptance", "mobility", "accelerance")
+
+
+@dataclass(frozen=True)
+class TyreParameters:
+    """Structural parameters in SI units (per unit arc length where marked).
+
+    Attributes
+    ----------
+    R : float, m            tread radius
+    b : float, m            tread width (the tension is T = P0 b R)
+    P0 : float, Pa          inflation pressure
+    rhoA : float, kg/m      tread mass per length
+    m_s : float, kg/m       sidewall mass per length
+    EI : float, N·m²        tread bending stiffness
+    k_r1 : float, N/m²      tread–sidewall radial stiffness per length
+    k_r2 : float, N/m²      sidewall–rim radial stiffness per length
+    m_w : float or None, kg rim (plus fixture) mass; None for a clamped rim
+    """
+
+    R: float = 0.65
+    b: float = 0.35
+    P0: float = 8.0e5
+    rhoA: float = 19.64
+    m_s: float = 10.0
+    EI: float = 25.697
+    k_r1: float = 6.686e6
+    k_r2: float = 4.431e6
+    m_w: float | None = None
+
+    UNITS = {"R": "m", "b": "m", "P0": "Pa", "rhoA": "kg/m", "m_s": "kg/m", "EI": "N·m²",
+             "k_r1": "N/m²", "k_r2": "N/m²", "m_w": "kg"}
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if f.name == "m_w" and v is None:
+                continue
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+                raise ParameterError(f"parameter {f.name}={v!r} must be a positive finite "
+                                     f"number ({self.UNITS[f.name]})")
+
+    @property
+    def T(self) -> float:
+        """Tread hoop pre-tension P0 b R, N."""
+        return self.P0 * self.b * self.R
+
+    def replace(self, **changes) -> "TyreParameters":
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_mapping(cls, values: Mapping, base: "TyreParameters | None" = None) -> "TyreParameters":
+        """Parameters from a mapping (e.g. a TOML table); unknown keys raise ParameterError."""
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(values) - names)
+        if unknown:
+            raise ParameterError(f"unknown model parameter {unknown[0]!r}; allowed: "
+                                 f"{', '.join(sorted(names))}")
+        out = {}
+        for k, v in values.items():
+            if k == "m_w" and (v is None or (isinstance(v, str) and v.lower() in ("clamped", "none", "inf"))):
+                out[k] = None
+                continue
+            try:
+                out[k] = float(v)
+            except (TypeError, ValueError):
+                raise ParameterError(f"parameter {k}={v!r} is not a number") from None
+        return dataclasses.replace(base or cls(), **out)
+
+
+#: Table 1 and Table 3 of the paper, in consistent SI units (``docs/model.md``).
+PAPER_PARAMETERS = TyreParameters()
+
+
+def block(n: int, p: TyreParameters, effects=(), freq_hz: float | None = None) -> Block:
+    """Per-length mass and stiffness of circumferential order ``n``.
+
+    Parameters
+    ----------
+    n : int, ≥ 0
+    p : TyreParameters
+    effects : sequence of (Effect, values)
+        As returned by :func:`tiremodal_cli.effects.resolve_effects`.
+    freq_hz : float, optional
+        Frequency at which frequency-dependent effects are evaluated.
+    """
+    Kn = p.EI * n**4 / p.R**4 + p.T * n**2 / p.R**2 + p.k_r1
+    if n == 1 and p.m_w is not None:
+        M = np.diag([p.rhoA, p.m_s, p.m_w / (np.pi * p.R)])
+        K = np.array([[Kn, -p.k_r1, 0.0],
+                      [-p.k_r1, p.k_r1 + p.k_r2, -p.k_r2],
+                      [0.0, -p.k_r2, p.k_r2]])
+        blk = Block(M, K, ("U", "S", "W"))
+    else:
+        M = np.diag([p.rhoA, p.m_s])
+        K = np.array([[Kn, -p.k_r1], [-p.k_r1, p.k_r1 + p.k_r2]])
+        blk = Block(M, K, ("U", "S"))
+    for eff, values in effects:
+        if eff.modify_block is not None:
+            blk = eff.modify_block(n, blk, values, p, freq_hz)
+    return blk
+
+
+def closed_form_hz(n, p: TyreParameters) -> np.ndarray:
+    """The seed model's closed form (MODEL.md) for the 2-DOF orders.
+
+    Parameters
+    ----------
+    n : int or (k,) array of int
+    p : TyreParameters
+
+    Returns
+    -------
+    freq_hz : (..., 2) ndarray
+        ``[..., 0]`` the same-direction, ``[..., 1]`` the opposite-direction frequency.
+    """
+    n = np.asarray(n, dtype=float)
+    Kn = p.EI * n**4 / p.R**4 + p.P0 * p.b * n**2 / p.R + p.k_r1
+    B = Kn * p.m_s + p.rhoA * (p.k_r1 + p.k_r2)
+    C = Kn * (p.k_r1 + p.k_r2) - p.k_r1**2
+    disc = np.sqrt(B * B - 4 * p.rhoA * p.m_s * C)
+    w2 = np.stack([(B - disc), (B + disc)], axis=-1) / (2 * p.rhoA * p.m_s)
+    return np.sqrt(w2) / (2 * np.pi)
+
+
+def paper_damping(n: int, branch: str) -> float:
+    """Modal damping ratio of the paper's order (Table A1), by n and branch.
+
+    Same-direction n = 1…8 and opposite-direction n = 1…10 take the measured values;
+    higher orders the last one; n = 0 and the rim and cavity modes 2 %.
+    """
+    same = (0.0192, 0.0163, 0.0179, 0.0202, 0.0242, 0.0291, 0.0359, 0.0376)
+    opp = (0.0213, 0.0215, 0.0189, 0.0196, 0.0228, 0.0245, 0.0254, 0.0272, 0.0282, 0.0307)
+    if n >= 1 and branch == "same":
+        return same[min(n, len(same)) - 1]
+    if n >= 1 and branch == "opposite":
+        return opp[min(n, len(opp)) - 1]
+    return 0.02
+
+
+@dataclass(frozen=True)
+class ModalModel:
+    """Modes of the tyre model.
+
+    Attributes
+    ----------
+    freq_hz : (n_modes,) ndarray, Hz       sorted ascending
+    n : (n_modes,) ndarray of int          circumferential order (dominant one if coupled)
+    harmonic : tuple of str                "cos", "sin" or "mixed"
+    branch : tuple of str                  "same", "opposite", "rim" or "cavity"
+    shapes : (n_modes, n_dof) ndarray      unit generalised mass, m/√kg
+    dofs : tuple of (kind, n, harmonic)    the generalised coordinates
+    """
+
+    freq_hz: np.ndarray
+    n: np.ndarray
+    harmonic: tuple[str, ...]
+    branch: tuple[str, ...]
+    shapes: np.ndarray
+    dofs: tuple[tuple[str, int, str], ...]
+
+    def select(self, mask) -> "ModalModel":
+        idx = np.flatnonzero(mask)
+        return ModalModel(self.freq_hz[idx], self.n[idx], tuple(self.harmonic[i] for i in idx),
+                          tuple(self.branch[i] for i in idx), self.shapes[idx], self.dofs)
+
+
+def _branch(vec, dofs, M_diag) -> str:
+    energy = M_diag * vec**2
+    frac = {k: energy[[j for j, d in enumerate(dofs) if d == k]].sum() / energy.sum()
+            for k in set(dofs)}
+    if frac.get("A", 0.0) > 0.5:
+        return "cavity"
+    if "W" in frac and frac["W"] >= max(frac.values()):
+        return "rim"
+    u, s = vec[dofs.index("U")], vec[dofs.index("S")]
+    return "same" if u * s >= 0 else "opposite"
+
+
+def _eig(M, K):
+    w2, vecs = scipy.linalg.eigh(K, M)
+    return np.clip(w2, 0.0, None), vecs
+
+
+def _solve_block(n, p, effects, freq_dependent):
+    """Eigenpairs of one order's block; frequency-dependent effects by fixed-point iteration."""
+    blk = block(n, p, effects)
+    w2, vecs = _eig(blk.M, blk.K)
+    if freq_dependent:
+        for r in range(len(w2)):
+            f = np.sqrt(w2[r]) / (2 * np.pi)
+            for _ in range(100):
+                b_f = block(n, p, effects, freq_hz=f)
+                w2_f, v_f = _eig(b_f.M, b_f.K)
+                f_new = np.sqrt(w2_f[r]) / (2 * np.pi)
+                done = abs(f_new - f) <= 1e-12 * max(f, 1.0)
+                f = f_new
+                if done:
+                    break
+            w2[r], vecs[:, r] = w2_f[r], v_f[:, r]
+    return blk, w2, vecs
+
+
+def _dof_list(p, effects, n_max):
+    dofs, spans, blocks = [], {}, {}
+    for n in range(n_max + 1):
+        blk = block(n, p, effects)
+        blocks[n] = blk
+        for h in (("cos",) if n == 0 else ("cos", "sin")):
+            start = len(dofs)
+            dofs.extend((k, n, h) for k in blk.dofs)
+            spans[(n, h)] = slice(start, len(dofs))
+    return tuple(dofs), spans, blocks
+
+
+def _length(n, p):
+    return (2.0 if n == 0 else 1.0) * np.pi * p.R
+
+
+def solve_modes(p: TyreParameters, *, n_max: int = 30, effects=None) -> ModalModel:
+    """All modes of orders 0 … ``n_max`` (both harmonics of every n ≥ 1).
+
+    Parameters
+    ----------
+    p : TyreParameters
+    n_max : int, keyword-only
+    effects : mapping ``{name: {param: value}}`` or resolved sequence, keyword-only
+
+    Returns
+    -------
+    ModalModel
+        Without a coupling effect every mode is a pure (n, harmonic); with one (a lumped
+        mass) the modes of the assembled system are labelled by their dominant order.
+    """
+    if not (isinstance(n_max, (int, np.integer)) and n_max >= 1):
+        raise ParameterError(f"n_max={n_max!r} must be an integer ≥ 1")
+    eff = resolve_effects(effects) if (effects is None or isinstance(effects, Mapping)) else tuple(effects)
+    freq_dep = any(e.frequency_dependent for e, _ in eff)
+    coupling = [(e, v) for e, v in eff if e.couple is not None]
+    dofs, spans, _ = _dof_list(p, eff, n_max)
+    nd = len(dofs)
+    if not coupling:
+        freqs, ns, harms, branches, shapes = [], [], [], [], []
+        for n in range(n_max + 1):
+            blk, w2, vecs = _solve_block(n, p, eff, freq_dep)
+            L = _length(n, p)
+            md = np.diag(blk.M)
+            for h in (("cos",) if n == 0 else ("cos", "sin")):
+                for r in range(len(w2)):
+                    phi = np.zeros(nd)
+                    phi[spans[(n, h)]] = vecs[:, r] / np.sqrt(L)
+                    freqs.append(np.sqrt(w2[r]) / (2 * np.pi))
+                    ns.append(n)
+                    harms.append(h)
+                    branches.append(_branch(vecs[:, r], blk.dofs, md))
+                    shapes.append(phi)
+        order = np.argsort(np.asarray(freqs), kind="stable")
+        return ModalModel(np.asarray(freqs)[order], np.asarray(ns)[order],
+                          tuple(harms[i] for i in order), tuple(branches[i] for i in order),
+                          np.asarray(shapes)[order], dofs)
+    return _solve_coupled(p, eff, coupling, dofs, spans, n_max, freq_dep)
+
+
+def _assemble(p, eff, coupling, dofs, spans, n_max, freq_hz=None):
+    M = np.zeros((len(dofs),) * 2)
+    K = np.zeros_like(M)
+    for n in range(n_max + 1):
+        blk = block(n, p, eff, freq_hz=freq_hz)
+        L = _length(n, p)
+        for h in (("cos",) if n == 0 else ("cos", "sin")):
+            s = spans[(n, h)]
+            M[s, s] = L * blk.M
+            K[s, s] = L * blk.K
+    for e, v in coupling:
+        M, K = e.couple(M, K, dofs, v, p)
+    return M, K
+
+
+def _solve_coupled(p, eff, coupling, dofs, spans, n_max, freq_dep):
+    M, K = _assemble(p, eff, coupling, dofs, spans, n_max)
+    w2, vecs = _eig(M, K)
+    if freq_dep:
+        for r in range(len(w2)):
+            f = np.sqrt(w2[r]) / (2 * np.pi)
+            for _ in range(100):
+                Mf, Kf = _assemble(p, eff, coupling, dofs, spans, n_max, freq_hz=f)
+                w2_f, v_f = _eig(Mf, Kf)
+                f_new = np.sqrt(w2_f[r]) / (2 * np.pi)
+                done = abs(f_new - f) <= 1e-12 * max(f, 1.0)
+                f = f_new
+                if done:
+                    break
+            w2[r], vecs[:, r] = w2_f[r], v_f[:, r]
+    ns, harms, branches = [], [], []
+    kinds = np.array([d[0] for d in dofs])
+    dof_n = np.array([d[1] for d in dofs])
+    dof_h = np.array([d[2] for d in dofs])
+    md = np.diag(M)
+    for r in range(len(w2)):
+        e = md * vecs[:, r] ** 2
+        n_dom = int(np.argmax(np.bincount(dof_n, weights=e, minlength=n_max + 1)))
+        sel = dof_n == n_dom
+        e_cos, e_sin = e[sel & (dof_h == "cos")].sum(), e[sel & (dof_h == "sin")].sum()
+        tot = e_cos + e_sin
+        harm = "cos" if e_cos > 0.9 * tot else "sin" if e_sin > 0.9 * tot else "mixed"
+        h_dom = "cos" if e_cos >= e_sin else "sin"
+        sub = sel & (dof_h == h_dom)
+        branches.append(_branch(vecs[sub, r], tuple(kinds[sub]), md[sub]))
+        ns.append(n_dom)
+        harms.append(harm)
+    return ModalModel(np.sqrt(w2) / (2 * np.pi), np.asarray(ns), tuple(harms), tuple(branches),
+                      vecs.T.copy(), dofs)
+
+
+def observation(dofs, location: str, angle_rad: float) -> np.ndarray:
+    """Weights that turn generalised coordinates into a radial displacement.
+
+    Parameters
+    ----------
+    dofs : tuple of (kind, n, harmonic)
+    location : {"tread", "sidewall", "rim"}
+    angle_rad : float, rad
+
+    Returns
+    -------
+    c : (n_dof,) ndarray
+        ``u(θ) = c @ q``; the same vector is the generalised force of a unit radial point
+        force at that place (reciprocity).
+    """
+    kind = {"tread": "U", "sidewall": "S", "rim": "W"}.get(location)
+    if kind is None:
+        raise ParameterError(f"location={location!r}; allowed: tread, sidewall, rim")
+    c = np.zeros(len(dofs))
+    for j, (k, n, h) in enumerate(dofs):
+        if k == kind:
+            c[j] = np.cos(n * angle_rad) if h == "cos" else np.sin(n * angle_rad)
+    return c
+
+
+def frf(model: ModalModel, freq_hz, damping_ratio, out_locations, out_angles, in_angles, *,
+        form: str = "accelerance") -> np.ndarray:
+    """FRFs between tread point forces and radial responses, by modal superposition.
+
+    ``H_oi(ω) = Σ_r c_o·φ_r c_i·φ_r / (ω_r² − ω² + 2iζ_r ω_r ω)`` (receptance), times
+    iω (mobility) or −ω² (accelerance).
+
+    Parameters
+    ----------
+    model : ModalModel
+    freq_hz : (n_freq,) array, Hz
+    damping_ratio : float or (n_modes,) array
+    out_locations : sequence of str, length n_out
+    out_angles : (n_out,) array, rad
+    in_angles : (n_in,) array, rad      angles of the tread point forces
+    form : {"receptance", "mobility", "accelerance"}
+
+    Returns
+    -------
+    H : (n_out, n_in, n_freq) complex ndarray
+        m/N, m/(s·N) or m/(s²·N).
+    """
+    if form not in FRF_FORMS:
+        raise ParameterError(f"form={form!r}; allowed: {', '.join(FRF_FORMS)}")
+    w = 2 * np.pi * np.asarray(freq_hz, dtype=float)
+    wr = 2 * np.pi * model.freq_hz
+    zeta = np.broadcast_to(np.asarray(damping_ratio, dtype=float), wr.shape)
+    C_out = np.array([observation(model.dofs, loc, a) for loc, a in zip(out_locations, out_angles)])
+    C_in = np.array([observation(model.dofs, "tread", a) for a in np.atleast_1d(in_angles)])
+    po = C_out @ model.shapes.T  # (n_out, n_modes)
+    pi = C_in @ model.shapes.T  # (n_in, n_modes)
+    den = wr[:, None] ** 2 - w[None, :] ** 2 + 2j * zeta[:, None] * wr[:, None] * w[None, :]
+    H = np.einsum("or,ir,rf->oif", po, pi, 1.0 / den)
+    if form == "mobility":
+        H = H * (1j * w)
+    elif form == "accelerance":
+        H = H * (-(w**2))
+    return H
