@@ -16,6 +16,14 @@ from pathlib import Path
 
 from .errors import OutputExistsError, ParameterError
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+_UMASK = _umask()
+
 __all__ = ["atomic_path", "check_overwrite", "sha256_file", "write_text_atomic"]
 
 
@@ -42,6 +50,7 @@ def atomic_path(target: str | os.PathLike, *, overwrite: bool = False) -> Iterat
     tmp_path = Path(tmp)
     try:
         yield tmp_path
+        os.chmod(tmp_path, 0o666 & ~_UMASK)  # mkstemp makes 0600; give what open() would
         os.replace(tmp_path, target)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):

@@ -6,6 +6,7 @@ force and every response channel of every hit at every impact point.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,7 +18,7 @@ from .errors import DataFormatError
 from .files import atomic_path
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "LOCATIONS", "Measurement", "read_measurement",
-           "write_measurement", "open_hdf5", "validate", "check_finite", "describe", "file_format"]
+           "write_measurement", "open_hdf5", "validate", "check_finite", "describe", "file_format", "open_measurement"]
 
 FORMAT_NAME = "tiremodal.measurement"
 FORMAT_VERSION = 1
@@ -158,6 +159,73 @@ def _attr_str(attrs, name):
     return v.decode("utf-8") if isinstance(v, bytes) else str(v)
 
 
+def _read_header(h, where: str, *, lazy: bool) -> dict:
+    """Root attributes and datasets of a measurement file, checked for presence and type."""
+    fmt = _attr_str(h.attrs, "format")
+    if fmt is None:
+        _fail(where, f"root attribute 'format' is missing; expected format={FORMAT_NAME!r}")
+    if fmt != FORMAT_NAME:
+        _fail(where, f"format={fmt!r} is not a measurement; expected {FORMAT_NAME!r}")
+    if "format_version" not in h.attrs:
+        _fail(where, "root attribute 'format_version' is missing")
+    version = h.attrs["format_version"]
+    if not (np.ndim(version) == 0 and int(version) == version and int(version) == FORMAT_VERSION):
+        _fail(where, f"unknown format_version {version!r}; this tiremodal reads version {FORMAT_VERSION}")
+    if "sample_rate" not in h.attrs:
+        _fail(where, "root attribute 'sample_rate' is missing")
+    data = {}
+    for name in ("force", "response", "point_angle", "channel_name", "channel_location",
+                 "channel_angle"):
+        if name not in h:
+            _fail(where, f"dataset {name!r} is missing")
+        if not isinstance(h[name], h5py.Dataset):
+            _fail(where, f"{name!r} is not a dataset")
+    try:
+        data["force"] = h["force"] if lazy else h["force"][()]
+        data["response"] = h["response"] if lazy else h["response"][()]
+        data["point_angle"] = np.asarray(h["point_angle"][()], dtype=np.float64)
+        data["channel_angle"] = np.asarray(h["channel_angle"][()], dtype=np.float64)
+        data["channel_name"] = _strings(h["channel_name"])
+        data["channel_location"] = _strings(h["channel_location"])
+    except (OSError, ValueError, TypeError) as exc:
+        _fail(where, f"cannot read the datasets ({exc.__class__.__name__}: {exc}); "
+                     "the file may be truncated")
+    for name in ("force", "response"):
+        if data[name].dtype.kind != "f":
+            _fail(where, f"dataset {name!r} has dtype {data[name].dtype}; allowed: float32, float64")
+    pressure = h.attrs.get("inflation_pressure")
+    sr = h.attrs["sample_rate"]
+    try:
+        sr = float(sr)
+    except (TypeError, ValueError):
+        _fail(where, f"sample_rate={sr!r} is not a number")
+    kwargs = dict(sample_rate=sr,
+                  inflation_pressure=None if pressure is None else float(pressure),
+                  tire=_attr_str(h.attrs, "tire"),
+                  description=_attr_str(h.attrs, "description"))
+    return {**data, **kwargs}
+
+
+@contextlib.contextmanager
+def open_measurement(path: str | os.PathLike):
+    """A validated Measurement whose ``force`` and ``response`` are lazy h5py datasets.
+
+    For stages that work point by point (``m.force[ip]`` reads one point): memory stays
+    at one point's records. Samples are not checked for finiteness here.
+    """
+    where = str(path)
+    h = open_hdf5(path)
+    try:
+        kwargs = _read_header(h, where, lazy=True)
+        try:
+            m = Measurement(**kwargs)
+        except DataFormatError as exc:
+            raise DataFormatError(str(exc).replace("measurement: ", f"{where}: ", 1)) from None
+        yield m
+    finally:
+        h.close()
+
+
 def read_measurement(path: str | os.PathLike, *, allow_nonfinite: bool = False) -> Measurement:
     """Read and validate a measurement file (layout version 1).
 
@@ -175,50 +243,9 @@ def read_measurement(path: str | os.PathLike, *, allow_nonfinite: bool = False) 
     """
     where = str(path)
     with open_hdf5(path) as h:
-        fmt = _attr_str(h.attrs, "format")
-        if fmt is None:
-            _fail(where, f"root attribute 'format' is missing; expected format={FORMAT_NAME!r}")
-        if fmt != FORMAT_NAME:
-            _fail(where, f"format={fmt!r} is not a measurement; expected {FORMAT_NAME!r}")
-        if "format_version" not in h.attrs:
-            _fail(where, "root attribute 'format_version' is missing")
-        version = h.attrs["format_version"]
-        if not (np.ndim(version) == 0 and int(version) == version and int(version) == FORMAT_VERSION):
-            _fail(where, f"unknown format_version {version!r}; this tiremodal reads version {FORMAT_VERSION}")
-        if "sample_rate" not in h.attrs:
-            _fail(where, "root attribute 'sample_rate' is missing")
-        data = {}
-        for name in ("force", "response", "point_angle", "channel_name", "channel_location",
-                     "channel_angle"):
-            if name not in h:
-                _fail(where, f"dataset {name!r} is missing")
-            if not isinstance(h[name], h5py.Dataset):
-                _fail(where, f"{name!r} is not a dataset")
-        try:
-            data["force"] = h["force"][()]
-            data["response"] = h["response"][()]
-            data["point_angle"] = np.asarray(h["point_angle"][()], dtype=np.float64)
-            data["channel_angle"] = np.asarray(h["channel_angle"][()], dtype=np.float64)
-            data["channel_name"] = _strings(h["channel_name"])
-            data["channel_location"] = _strings(h["channel_location"])
-        except (OSError, ValueError, TypeError) as exc:
-            _fail(where, f"cannot read the datasets ({exc.__class__.__name__}: {exc}); "
-                         "the file may be truncated")
-        for name in ("force", "response"):
-            if data[name].dtype.kind != "f":
-                _fail(where, f"dataset {name!r} has dtype {data[name].dtype}; allowed: float32, float64")
-        pressure = h.attrs.get("inflation_pressure")
-        sr = h.attrs["sample_rate"]
-        try:
-            sr = float(sr)
-        except (TypeError, ValueError):
-            _fail(where, f"sample_rate={sr!r} is not a number")
-        kwargs = dict(sample_rate=sr,
-                      inflation_pressure=None if pressure is None else float(pressure),
-                      tire=_attr_str(h.attrs, "tire"),
-                      description=_attr_str(h.attrs, "description"))
+        kwargs = _read_header(h, where, lazy=False)
     try:
-        m = Measurement(**data, **kwargs)
+        m = Measurement(**kwargs)
     except DataFormatError as exc:
         raise DataFormatError(str(exc).replace("measurement: ", f"{where}: ", 1)) from None
     if not allow_nonfinite:

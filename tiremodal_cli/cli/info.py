@@ -6,13 +6,14 @@ from pathlib import Path
 
 import click
 
-from .. import measurement
+from .. import frffile, measurement
 from ..errors import DataFormatError
 from .main import cli
 from .options import echo_json, json_option
 
 DESCRIBERS = {measurement.FORMAT_NAME: lambda p: measurement.describe(
-    measurement.read_measurement(p, allow_nonfinite=True))}
+    measurement.read_measurement(p, allow_nonfinite=True)),
+              frffile.FORMAT_NAME: frffile.describe_frf}
 
 
 def _human(d: dict) -> str:

@@ -67,7 +67,7 @@ def cli(verbose, quiet):
 
 
 def _register():
-    from . import info, ingest, simulate  # noqa: F401  (each adds its command)
+    from . import frf, info, ingest, simulate  # noqa: F401  (each adds its command)
 
 
 _register()
