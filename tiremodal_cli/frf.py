@@ -58,8 +58,9 @@ class FRFOptions:
 
     ``exp_end`` / ``exp_tau_s``: exponential window (give one, or neither for none);
     ``force_window``: apply the force window; ``force_window_s``/``taper_s``: its lengths
-    (None: from the pulse). ``hit_mac_min``: a hit whose FRF over the band has a MAC below
-    this with the mean of the other hits is rejected (needs ≥ 3 hits).
+    (None: from the pulse). A hit is rejected as inconsistent (needs ≥ 3 hits) when, on
+    some channel, the other hits' H1 leaves more than ``hit_residual_max`` of its spectral
+    energy unexplained and that is more than ``hit_residual_ratio`` × the hits' median.
     """
 
     estimator: str = "H1"
@@ -72,9 +73,9 @@ class FRFOptions:
     exp_tau_s: float | None = None
     check_hits: bool = True
     double_hit_relative: float = 0.2
-    dead_relative: float = 1e-3
     dead_channel_relative: float = 1e-5
-    hit_mac_min: float = 0.9
+    hit_residual_max: float = 0.1
+    hit_residual_ratio: float = 3.0
 
     def check(self):
         if self.estimator not in ESTIMATORS:
@@ -83,8 +84,8 @@ class FRFOptions:
             raise ParameterError(f"form={self.form!r}; allowed: {', '.join(FORMS)}")
         if self.exp_end is not None and self.exp_tau_s is not None:
             raise ParameterError("give the exponential window as exp_end or exp_tau_s, not both")
-        if not 0 < self.hit_mac_min <= 1:
-            raise ParameterError(f"hit_mac_min={self.hit_mac_min} must be in (0, 1]")
+        if not 0 < self.hit_residual_max:
+            raise ParameterError(f"hit_residual_max={self.hit_residual_max} must be > 0")
 
 
 @dataclass(frozen=True)
@@ -214,21 +215,25 @@ def _band(freq, band_hz, fs):
     return sel
 
 
-def _mac_vs_rest(Hh, weight):
-    """MAC of each hit's FRF (over the band) with the mean of the other hits, per channel.
+def _leave_one_out_residual(F, Y):
+    """How well the other hits predict each hit: ``Σ|Y_i − Ĥ_{−i} F_i|² / Σ|Y_i|²``.
 
-    Hh : (n_hits, n_channels, n_f) ; returns (n_hits, n_channels)
+    Ĥ_{−i} is the H1 of all hits but i. For consistent hits this is the noise-to-signal
+    energy, the same for every hit; a hit that does not belong stands out against the
+    median of the hits (a channel at a node is noisy for every hit and does not).
+
+    F : (n_hits, n_f) ; Y : (n_hits, n_channels, n_f) ; returns (n_hits, n_channels)
     """
-    n = Hh.shape[0]
-    tot = Hh.sum(axis=0)
-    out = np.ones(Hh.shape[:2])
-    for i in range(n):
-        rest = (tot - Hh[i]) / (n - 1)
-        a = Hh[i] * weight
-        b = rest * weight
-        num = np.abs(np.sum(np.conj(a) * b, axis=-1)) ** 2
-        den = np.sum(np.abs(a) ** 2, axis=-1) * np.sum(np.abs(b) ** 2, axis=-1)
-        out[i] = np.where(den > 0, num / np.where(den > 0, den, 1), 0.0)
+    gfy = np.conj(F)[:, None, :] * Y
+    gff = np.abs(F) ** 2
+    tot_fy, tot_ff = gfy.sum(axis=0), gff.sum(axis=0)
+    out = np.empty(Y.shape[:2])
+    for i in range(F.shape[0]):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            h = np.where(tot_ff > gff[i], (tot_fy - gfy[i]) / (tot_ff - gff[i]), 0)
+        res = np.sum(np.abs(Y[i] - h * F[i]) ** 2, axis=-1)
+        sig = np.sum(np.abs(Y[i]) ** 2, axis=-1)
+        out[i] = np.where(sig > 0, res / np.where(sig > 0, sig, 1), 0.0)
     return out
 
 
@@ -249,7 +254,7 @@ def _time_checks(f, y, fs, opt, names, ip):
     ok = fin_f & fin_y.all(axis=1)
     fz = np.where(np.isfinite(f), f, 0.0)
     yz = np.where(np.isfinite(y), y, 0.0)
-    clip_f = clipped_samples(fz, min_run=2) > 0
+    clip_f = clipped_samples(fz) > 0
     clip_y = clipped_samples(yz) > 0
     dbl = double_hit(fz, fs, min_relative=opt.double_hit_relative)
     for h in range(n_h):
@@ -298,21 +303,25 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
                   if (opt.exp_end or opt.exp_tau_s) else (None, None))
     total = 2 * n_p
     # pass 1: time-domain checks and record RMS (for dead records and channels)
-    rejections, rms = [], np.zeros((n_p, n_h, n_c))
+    rejections, rms, spread = [], np.zeros((n_p, n_h, n_c)), np.zeros((n_p, n_h, n_c))
     for ip in range(n_p):
-        r, rms[ip] = _time_checks(np.asarray(m.force[ip]), np.asarray(m.response[ip]), fs, opt, names, ip)
+        y = np.asarray(m.response[ip])
+        r, rms[ip] = _time_checks(np.asarray(m.force[ip]), y, fs, opt, names, ip)
+        spread[ip] = np.ptp(np.where(np.isfinite(y), y, 0.0), axis=-1)
         rejections += r
         if progress:
             progress(ip + 1, total)
     med = np.median(rms.reshape(-1, n_c), axis=0)
     dead_ch = tuple(names[c] for c in range(n_c)
-                    if med[c] <= opt.dead_channel_relative * med.max() or np.all(rms[..., c] == 0))
+                    if med[c] <= opt.dead_channel_relative * med.max() or np.all(spread[..., c] == 0))
     for name in dead_ch:
         rejections.append(Rejection(None, None, "dead channel (no signal in any hit)", name))
     live = np.array([n not in dead_ch for n in names])
     if opt.check_hits:
-        for ip, h, c in zip(*np.nonzero((rms < opt.dead_relative * med) & live)):
-            rejections.append(Rejection(int(ip), int(h), "dead record (no signal)", names[c]))
+        # a record that does not move at all is a dead sensor or cable in that hit; a small
+        # one is not (a sensor at a node of the response records noise, and that is data)
+        for ip, h, c in zip(*np.nonzero((spread == 0) & live)):
+            rejections.append(Rejection(int(ip), int(h), "dead record (constant samples)", names[c]))
     bad = np.zeros((n_p, n_h), dtype=bool)
     for r in rejections:
         if r.hit is not None:
@@ -335,17 +344,15 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
             F = np.fft.rfft(f, axis=-1)[:, sel]
             Y = np.fft.rfft(y, axis=-1)[:, :, sel]
             if opt.check_hits and acc.size >= 3:
-                pf = np.abs(F) ** 2
-                weight = (pf.mean(axis=0) > 1e-4 * pf.mean(axis=0).max())
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    Hh = np.where(weight, Y / np.where(F != 0, F, 1)[:, None, :], 0)
-                mac = _mac_vs_rest(Hh[:, live], weight)
-                worst = mac.min(axis=1)
-                for k in np.flatnonzero(worst < opt.hit_mac_min):
-                    c = np.flatnonzero(live)[np.argmin(mac[k])]
-                    rejections.append(Rejection(ip, int(acc[k]), f"poor consistency with the other hits "
-                                                f"(FRF MAC {worst[k]:.3f} < {opt.hit_mac_min})", names[c]))
-                keep = worst >= opt.hit_mac_min
+                d = _leave_one_out_residual(F, Y[:, live])
+                ratio = d / np.median(d, axis=0, keepdims=True)
+                flag = (d > opt.hit_residual_max) & (ratio > opt.hit_residual_ratio)
+                for k in np.flatnonzero(flag.any(axis=1)):
+                    c = np.flatnonzero(live)[np.argmax(np.where(flag[k], ratio[k], -np.inf))]
+                    rejections.append(Rejection(ip, int(acc[k]), "poor consistency with the other hits "
+                                                f"(residual {d[k, list(np.flatnonzero(live)).index(c)]:.2f} of its "
+                                                f"energy, {ratio[k].max():.1f}× the hits' median)", names[c]))
+                keep = ~flag.any(axis=1)
                 F, Y, acc = F[keep], Y[keep], acc[keep]
             if acc.size:
                 H[:, ip], coh[:, ip] = estimate(F[:, None, :], Y, estimator=opt.estimator)
@@ -356,7 +363,7 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
     coh[~live] = np.nan
     failed = np.flatnonzero(n_avg == 0)
     if failed.size == n_p:
-        reasons = sorted({r.reason for r in rejections})
+        reasons = sorted({r.reason for r in rejections if r.hit is not None})
         raise DataFormatError(f"every hit of every point was rejected ({'; '.join(reasons)})")
     for ip in failed:
         log.warning("point %d (%.1f°): all %d hits rejected; the point is left out", ip,

@@ -12,36 +12,39 @@ import scipy.signal
 __all__ = ["clipped_samples", "is_clipped", "double_hit", "dead", "pulse_extent"]
 
 
-def clipped_samples(x, *, axis=-1, min_run: int = 3, rtol: float = 1e-6) -> np.ndarray:
+def clipped_samples(x, *, axis=-1, min_run: int = 2, min_count: int = 3, rtol: float = 1e-6) -> np.ndarray:
     """Samples stuck at the record's extreme value, counted per record.
 
     An ADC (or a charge amplifier) in overload holds its full-scale value, so a clipped
-    record shows runs of equal samples at its maximum absolute value. A run of at least
-    ``min_run`` samples within ``rtol`` of that value counts.
+    record has several samples at exactly its maximum absolute value: a run of
+    ``min_run`` adjacent ones, or ``min_count`` anywhere (a response that swings through
+    the limit several times between samples). Unclipped records almost never tie at
+    their peak. Records that are not clipped count 0.
 
     Parameters
     ----------
     x : (..., n_samples) array
     Returns
     -------
-    count : (...) ndarray of int   samples in such runs
+    count : (...) ndarray of int   samples at the limit in clipped records, else 0
     """
     x = np.moveaxis(np.asarray(x), axis, -1)
-    peak = np.max(np.abs(x), axis=-1, keepdims=True)
-    at = np.abs(np.abs(x) - peak) <= rtol * np.maximum(peak, np.finfo(float).tiny)
-    at &= peak > 0
-    # run lengths of True along the last axis, vectorised: a sample belongs to a long run
-    # when a window of min_run consecutive flags that contains it is all True.
-    win = np.lib.stride_tricks.sliding_window_view(at, min_run, axis=-1).all(axis=-1)
-    member = np.zeros_like(at)
-    for k in range(min_run):
-        member[..., k:k + win.shape[-1]] |= win
-    return member.sum(axis=-1)
+    a = np.abs(x)
+    peak = np.max(a, axis=-1, keepdims=True)
+    at = (a >= peak * (1 - rtol)) & (peak > 0)
+    count = at.sum(axis=-1)
+    run = np.zeros(count.shape, dtype=bool)
+    maybe = count >= 2
+    if maybe.any():
+        sub = at[maybe]
+        win = np.lib.stride_tricks.sliding_window_view(sub, min_run, axis=-1).all(axis=-1)
+        run[maybe] = win.any(axis=-1)
+    return np.where(run | (count >= min_count), count, 0)
 
 
-def is_clipped(x, *, axis=-1, min_run: int = 3) -> np.ndarray:
-    """True for records with a run of ``min_run`` or more samples at their extreme."""
-    return clipped_samples(x, axis=axis, min_run=min_run) > 0
+def is_clipped(x, *, axis=-1) -> np.ndarray:
+    """True for records that :func:`clipped_samples` finds clipped."""
+    return clipped_samples(x, axis=axis) > 0
 
 
 def pulse_extent(force, fs: float, *, threshold: float = 0.05):

@@ -170,7 +170,8 @@ def _read_header(h, where: str, *, lazy: bool) -> dict:
         _fail(where, "root attribute 'format_version' is missing")
     version = h.attrs["format_version"]
     if not (np.ndim(version) == 0 and int(version) == version and int(version) == FORMAT_VERSION):
-        _fail(where, f"unknown format_version {version!r}; this tiremodal reads version {FORMAT_VERSION}")
+        _fail(where, f"unknown format_version {np.asarray(version).tolist()!r}; "
+                     f"this tiremodal reads version {FORMAT_VERSION}")
     if "sample_rate" not in h.attrs:
         _fail(where, "root attribute 'sample_rate' is missing")
     data = {}
@@ -300,7 +301,7 @@ def describe(m: Measurement) -> dict:
     """Summary of a measurement: sizes, rate, duration, peak force, clipped samples.
 
     Clipped samples are those in runs at a record's extreme value
-    (:func:`tiremodal_cli.hits.clipped_samples`; 2 for the short force pulse, 3 for responses).
+    (:func:`tiremodal_cli.hits.clipped_samples`).
     """
     from .hits import clipped_samples
 
@@ -314,7 +315,7 @@ def describe(m: Measurement) -> dict:
                      for n, loc, a in zip(m.channel_name, m.channel_location, m.channel_angle)],
         "point_angle_deg": [float(x) for x in np.rad2deg(m.point_angle)],
         "peak_force_n": float(np.max(np.abs(np.where(fin_f, m.force, 0)))),
-        "clipped_samples": {"force": int(clipped_samples(np.nan_to_num(m.force), min_run=2).sum()),
+        "clipped_samples": {"force": int(clipped_samples(np.nan_to_num(m.force)).sum()),
                             **{n: int(clipped_samples(np.nan_to_num(m.response[:, :, i])).sum())
                                for i, n in enumerate(m.channel_name)}},
         "non_finite_samples": int((~fin_f).sum() + (~np.isfinite(m.response)).sum()),

@@ -45,8 +45,8 @@ class Faults:
     double_hits : tuple of (point, hit)
         A second, weaker blow 3–8 ms after the first.
     clipped : tuple of (point, hit, channel)
-        That record saturates at 60 % of its peak; channel ``"force"`` clips the
-        force at 30 % (a short pulse needs a low limit to show a flat top).
+        That record saturates at 60 % of its peak (30 % for channel ``"force"``), and
+        low enough that at least three samples sit at the limit (a flat top to see).
     dead_channel : str or None
         That response channel records only a tiny noise in every hit (a broken cable).
     missing_point : int or None
@@ -76,7 +76,7 @@ class SimulationConfig:
     pulse_width_jitter: float = 0.1
     amplitude_n: float = 400.0
     amplitude_jitter: float = 0.2
-    noise: float = 0.0
+    noise: float = 0.0  # std relative to each channel's RMS over the test
     damping: float | None = None
     anti_alias: bool = True
     channels: tuple[Channel, ...] = DEFAULT_CHANNELS
@@ -163,7 +163,9 @@ def _anti_alias(freq_hz, fs):
 
 
 def _clip(x, level_fraction=0.6):
-    lim = level_fraction * np.max(np.abs(x))
+    """Saturate at ``level_fraction`` of the peak, low enough that ≥ 3 samples hit the limit."""
+    a = np.sort(np.abs(x))
+    lim = min(level_fraction * a[-1], a[-3])
     return np.clip(x, -lim, lim)
 
 
@@ -221,8 +223,10 @@ def simulate(cfg: SimulationConfig, *, progress=None) -> Simulation:
             if progress is not None:
                 progress(ip * n_h + h + 1, n_p * n_h)
     if cfg.noise > 0:
-        f_rms = np.sqrt(np.mean(force**2, axis=-1, keepdims=True))
-        r_rms = np.sqrt(np.mean(resp**2, axis=-1, keepdims=True))
+        # a sensor noise floor: std = noise × the channel's RMS over the whole test, so a
+        # record at a node of the response holds noise, as a real one would
+        f_rms = np.sqrt(np.mean(force**2))
+        r_rms = np.sqrt(np.mean(resp**2, axis=(0, 1, 3), keepdims=True))
         force = force + cfg.noise * f_rms * rng.standard_normal(force.shape)
         resp = resp + cfg.noise * r_rms * rng.standard_normal(resp.shape)
     if dead is not None:

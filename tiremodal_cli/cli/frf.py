@@ -30,8 +30,9 @@ from .options import Progress, echo_json, json_option, overwrite_option
 @click.option("--exp-tau", type=click.FloatRange(0, min_open=True), metavar="SECONDS",
               help="Exponential window by its time constant instead.")
 @click.option("--no-hit-checks", is_flag=True, help="Keep every finite hit (no double-hit/clip/consistency checks).")
-@click.option("--hit-mac-min", type=click.FloatRange(0, 1, min_open=True), default=0.9, show_default=True,
-              help="Reject a hit whose FRF MAC with the other hits is below this (≥ 3 hits).")
+@click.option("--hit-residual-max", type=click.FloatRange(0, min_open=True), default=0.1, show_default=True,
+              help="Reject a hit the other hits' H1 leaves more of its energy unexplained than this "
+                   "(and 3× the hits' median; ≥ 3 hits).")
 @click.option("--uff", "uff_out", type=click.Path(dir_okay=False, path_type=Path),
               help="Also write the FRFs as UFF 58 (function type 4).")
 @click.option("--plot", "plot_out", type=click.Path(dir_okay=False, path_type=Path),
@@ -40,7 +41,7 @@ from .options import Progress, echo_json, json_option, overwrite_option
 @overwrite_option
 @json_option
 def frf_cmd(measurement, output, estimator, form, band, force_window, force_window_length, exp_end, exp_tau,
-            no_hit_checks, hit_mac_min, uff_out, plot_out, plot_points, overwrite, as_json):
+            no_hit_checks, hit_residual_max, uff_out, plot_out, plot_points, overwrite, as_json):
     """Estimate FRFs of MEASUREMENT into OUTPUT, rejecting bad hits (reported)."""
     for out in (output, uff_out, plot_out):
         if out is not None:
@@ -49,7 +50,7 @@ def frf_cmd(measurement, output, estimator, form, band, force_window, force_wind
         raise click.UsageError("give --exp-end or --exp-tau, not both")
     opt = FRFOptions(estimator=estimator, form=form, band_hz=tuple(band) if band else None,
                      force_window=force_window, force_window_s=force_window_length, exp_end=exp_end,
-                     exp_tau_s=exp_tau, check_hits=not no_hit_checks, hit_mac_min=hit_mac_min)
+                     exp_tau_s=exp_tau, check_hits=not no_hit_checks, hit_residual_max=hit_residual_max)
     try:
         pts = [int(x) - 1 for x in plot_points.split(",") if x.strip()]
     except ValueError:

@@ -12,7 +12,7 @@ from .main import cli
 from .options import echo_json, json_option
 
 DESCRIBERS = {measurement.FORMAT_NAME: lambda p: measurement.describe(
-    measurement.read_measurement(p, allow_nonfinite=True)),
+    measurement.read_measurement(p)),
               frffile.FORMAT_NAME: frffile.describe_frf}
 
 

@@ -23,6 +23,7 @@ class TiremodalGroup(click.Group):
         return [c for c in COMMANDS if c in self.commands] + sorted(set(self.commands) - set(COMMANDS))
 
     def main(self, args=None, prog_name=None, **extra):
+        extra.pop("standalone_mode", None)  # this group always handles its own exits
         try:
             rv = super().main(args=args, prog_name=prog_name or "tiremodal", standalone_mode=False, **extra)
         except click.UsageError as exc:

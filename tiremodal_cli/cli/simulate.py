@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 from pathlib import Path
 
 import click
@@ -12,7 +11,8 @@ import numpy as np
 from ..config import load_mapping
 from ..effects import EFFECTS
 from ..errors import ParameterError
-from ..files import atomic_path, check_overwrite
+from ..files import atomic_path, check_overwrite, write_text_atomic
+from ..ingest.uff import write_uff_time
 from ..measurement import write_measurement
 from ..model import TyreParameters
 from ..simulate import Channel, Faults, SimulationConfig, simulate
@@ -73,6 +73,16 @@ def build_config(config_file, overrides: dict, params: dict, effects: dict, faul
     return SimulationConfig(params=p, effects=eff, faults=flt, channels=chans, **scal)
 
 
+def _toml(mapping: dict) -> str:
+    """The UFF mapping as TOML (two flat tables; no TOML writer in the standard library)."""
+    lines = ["# impact points: UFF reference node -> angle in degrees", "[points]"]
+    lines += [f'"{k}" = {v!r}' for k, v in mapping["points"].items()]
+    lines += ["", "# response channels: \"node:direction\" -> name, location, angle in degrees", "[channels]"]
+    lines += [f'"{k}" = {{ name = "{c["name"]}", location = "{c["location"]}", angle_deg = {c["angle_deg"]!r} }}'
+              for k, c in mapping["channels"].items()]
+    return "\n".join(lines) + "\n"
+
+
 @cli.command("simulate")
 @click.argument("output", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--config", "config_file", type=click.Path(exists=True, dir_okay=False),
@@ -98,11 +108,13 @@ def build_config(config_file, overrides: dict, params: dict, effects: dict, faul
 @click.option("--missing-point", type=int, help="Leave this point out of the file.")
 @click.option("--dtype", type=click.Choice(["float32", "float64"]), help="Sample type (default float32).")
 @click.option("--compress", is_flag=True, help="gzip the records (smaller, slower).")
+@click.option("--uff-dir", type=click.Path(file_okay=False, path_type=Path),
+              help="Also write the test as UFF 58 time records (one file a point) and mapping.toml there.")
 @overwrite_option
 @json_option
 def simulate_cmd(output, config_file, truth, seed, n_points, n_hits, sample_rate, n_samples, noise,
                  damping, n_max, params, effects, double_hit, clip, dead_channel, missing_point, dtype,
-                 compress, overwrite, as_json):
+                 compress, uff_dir, overwrite, as_json):
     """Simulate a roving-hammer test of the tyre model into OUTPUT (HDF5).
 
     Writes OUTPUT and a truth JSON beside it: every mode below Nyquist with n, branch,
@@ -123,6 +135,10 @@ def simulate_cmd(output, config_file, truth, seed, n_points, n_hits, sample_rate
         tmp_truth.write_text(dumps(sim.truth), encoding="utf-8")
         write_measurement(output, sim.measurement, overwrite=overwrite,
                           compression="gzip" if compress else None)
+    if uff_dir is not None:
+        uff_dir.mkdir(parents=True, exist_ok=True)
+        _, mapping = write_uff_time(uff_dir, sim.measurement, overwrite=overwrite)
+        write_text_atomic(uff_dir / "mapping.toml", _toml(mapping), overwrite=overwrite)
     summary = {"output": str(output), "truth": str(truth), "n_points": sim.measurement.n_points,
                "n_hits": sim.measurement.n_hits, "n_channels": sim.measurement.n_channels,
                "n_samples": sim.measurement.n_samples, "sample_rate": sim.measurement.sample_rate,

@@ -1,0 +1,224 @@
+"""The FRF stage: estimators, windows, hit-quality checks, file and UFF output, bad input."""
+
+import json
+
+import h5py
+import numpy as np
+import pytest
+import pyuff
+import scipy.optimize
+from numpy.testing import assert_allclose
+
+from tiremodal_cli.frf import FRFOptions, compute_frf, estimate
+from tiremodal_cli.frffile import read_frf
+from tiremodal_cli.measurement import Measurement, write_measurement
+from tiremodal_cli.simulate import Faults, SimulationConfig, half_sine_spectrum, simulate
+from tiremodal_cli.windows import correct_damping, exponential_window
+
+from conftest import run_cli
+
+
+def test_estimators_agree_without_noise_and_bracket_with_it(rng):
+    H = np.exp(1j * np.linspace(0, 3, 50)) * np.linspace(1, 2, 50)
+    F = rng.standard_normal((20, 50)) + 1j * rng.standard_normal((20, 50))
+    for est in ("H1", "H2", "Hv"):
+        got, coh = estimate(F, H * F, estimator=est)
+        assert_allclose(got, H, rtol=1e-12)
+        assert_allclose(coh, 1.0, rtol=1e-12)
+    N = 0.5 * (rng.standard_normal((20, 50)) + 1j * rng.standard_normal((20, 50)))
+    h1, _ = estimate(F, H * F + N, estimator="H1")
+    h2, _ = estimate(F, H * F + N, estimator="H2")
+    hv, _ = estimate(F, H * F + N, estimator="Hv")
+    # |H1| ≤ |Hv| ≤ |H2| always (Bendat & Piersol)
+    assert np.all(np.abs(h1) <= np.abs(hv) + 1e-12) and np.all(np.abs(hv) <= np.abs(h2) + 1e-12)
+
+
+def test_noisy_h1_within_coherence_error_bound(noisy_sim):
+    """|H1 − H| / |H| is the random error the coherence predicts: √((1 − γ²) / (n γ²)).
+
+    (Bendat & Piersol, eq. 9.90, for the complex error with n averages.) Tread and
+    sidewall channels, lines with γ² > 0.8; the rim channel has true zeros at its nodes.
+    """
+    r = compute_frf(noisy_sim.measurement, FRFOptions(band_hz=(20, 400)))
+    true = noisy_sim.frf[..., (noisy_sim.freq_hz >= 20) & (noisy_sim.freq_hz <= 400)]
+    g = r.coherence[:2]
+    err = np.abs(r.H[:2] - true[:2]) / np.abs(true[:2])
+    bound = np.sqrt((1 - g) / (r.n_averages[None, :, None] * g))
+    q = (err / bound)[g > 0.8]
+    assert q.size > 5000
+    assert 0.7 < np.median(q) < 1.4
+    assert np.percentile(q, 95) < 4.0
+    assert np.median(err[g > 0.8]) < 0.02
+
+
+def test_every_fault_rejected_and_no_clean_hit():
+    faults = Faults(double_hits=((1, 0), (9, 2), (20, 1), (33, 2)),
+                    clipped=((2, 1, "tread"), (5, 0, "sidewall"), (14, 2, "force"), (27, 0, "rim")))
+    for seed in (11, 12):
+        s = simulate(SimulationConfig(n_points=34, n_hits=3, n_samples=2048, noise=0.01, seed=seed,
+                                      params=s_params(), faults=faults))
+        r = compute_frf(s.measurement)
+        got = {(x.point, x.hit) for x in r.rejections}
+        want = {(p, h) for p, h in faults.double_hits} | {(p, h) for p, h, _ in faults.clipped}
+        assert got == want, (seed, sorted(got ^ want))
+        reasons = {(x.point, x.hit): x.reason for x in r.rejections}
+        assert all(reasons[(p, h)] == "double hit" for p, h in faults.double_hits)
+        assert reasons[(14, 2)] == "clipped (overloaded) force"
+        assert reasons[(2, 1)] == "clipped (overloaded) response"
+        assert r.n_averages.sum() == 34 * 3 - len(want)
+
+
+def s_params():
+    from tiremodal_cli.model import TyreParameters
+
+    return TyreParameters(m_w=1000.0)
+
+
+def test_dead_channel_flagged_not_fatal():
+    s = simulate(SimulationConfig(n_points=10, n_hits=2, n_samples=1024, noise=0.01, seed=3, params=s_params(),
+                                  faults=Faults(dead_channel="sidewall")))
+    r = compute_frf(s.measurement)
+    assert r.dead_channels == ("sidewall",)
+    assert np.all(np.isnan(r.H[1])) and np.all(np.isfinite(r.H[0]))
+    assert all(x.hit is None for x in r.rejections)
+
+
+def test_inconsistent_hit_rejected_by_frf_mac(noisy_sim):
+    m = noisy_sim.measurement
+    resp = np.array(m.response)
+    resp[4, 1, 0] = np.roll(resp[4, 1, 0], 37) * -1.0  # a record that does not belong to its force
+    bad = Measurement(force=m.force, response=resp, sample_rate=m.sample_rate, point_angle=m.point_angle,
+                      channel_name=m.channel_name, channel_location=m.channel_location,
+                      channel_angle=m.channel_angle)
+    r = compute_frf(bad)
+    assert [(x.point, x.hit) for x in r.rejections] == [(4, 1)]
+    assert "poor consistency" in r.rejections[0].reason and r.rejections[0].channel == "tread"
+    # the same test untouched: nothing rejected (the rim channel at its nodes is noise, not a bad hit)
+    assert compute_frf(noisy_sim.measurement).rejections == ()
+
+
+def _sdof_records(fn, zeta, fs, n, n_hits=2, seed=0):
+    """Impact records of a single-DOF oscillator (accelerance), built on the DFT grid."""
+    rng = np.random.default_rng(seed)
+    f = np.fft.rfftfreq(n, 1 / fs)
+    w, wn = 2 * np.pi * f, 2 * np.pi * fn
+    H = -(w**2) / (wn**2 - w**2 + 2j * zeta * wn * w)
+    F = np.stack([half_sine_spectrum(f, 1e-3, 100 * (1 + 0.1 * rng.uniform(-1, 1))) * np.exp(-2j * np.pi * f * 0.01)
+                  for _ in range(n_hits)]) * fs
+    return np.fft.irfft(F, n), np.fft.irfft(F * H, n)[:, None, :]
+
+
+def _fit_sdof(freq, H, f0):
+    """Local least-squares fit of an SDOF accelerance plus a constant residual (scipy.optimize)."""
+    sel = np.abs(freq - f0) < 0.15 * f0
+
+    def res(x):
+        fn, z, a, b, c, d = x
+        w, wn = 2 * np.pi * freq[sel], 2 * np.pi * fn
+        model = (a + 1j * b) * -(w**2) / (wn**2 - w**2 + 2j * z * wn * w) + c + 1j * d
+        r = model - H[sel]
+        return np.concatenate([r.real, r.imag])
+
+    sol = scipy.optimize.least_squares(res, [f0, 0.02, 1.0, 0.0, 0.0, 0.0], x_scale="jac")
+    return sol.x[0], sol.x[1]
+
+
+def test_exponential_window_correction_recovers_damping():
+    fn, zeta, fs, n = 80.0, 0.01, 1024.0, 8192
+    force, resp = _sdof_records(fn, zeta, fs, n)
+    # a window that doubles the apparent damping: 1/τ = ζ ω_n
+    tau = 1 / (zeta * 2 * np.pi * fn)
+    m = Measurement(force=force[:, None, :].transpose(1, 0, 2), response=resp[None], sample_rate=fs,
+                    point_angle=np.zeros(1), channel_name=("a",), channel_location=("tread",),
+                    channel_angle=np.zeros(1))
+    r = compute_frf(m, FRFOptions(exp_tau_s=tau, force_window=False))
+    f_est, z_est = _fit_sdof(r.freq_hz, r.H[0, 0], fn)
+    assert z_est == pytest.approx(2 * zeta, rel=0.05)  # the window did double it
+    f_cor, z_cor = correct_damping(f_est, z_est, r.exp_tau_s)
+    assert z_cor == pytest.approx(zeta, rel=0.02)
+    assert f_cor == pytest.approx(fn, rel=1e-4)
+    _, tau2 = exponential_window(n, fs, end_value=0.01)
+    assert tau2 == pytest.approx(-(n - 1) / fs / np.log(0.01))
+
+
+def test_cli_frf_file_uff_plot(tmp_path, noisy_sim):
+    meas = tmp_path / "m.h5"
+    write_measurement(meas, noisy_sim.measurement)
+    before = meas.read_bytes()
+    out, uff, png = tmp_path / "f.h5", tmp_path / "f.uff", tmp_path / "f.png"
+    res = run_cli(["frf", meas, "-o", out, "--band", 0, 300, "--uff", uff, "--plot", png, "--plot-points", "1,3",
+                   "--exp-end", 0.1, "--json"])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert d["n_points"] == 12 and d["band_hz"] == [0.0, 300.0] and d["exponential_window"]["tau_s"] > 0
+    r = read_frf(out)
+    assert r.H.shape == (3, 12, d["n_freq"]) and r.exp_tau_s == pytest.approx(d["exp_tau_s"])
+    with h5py.File(out) as h:
+        assert len(h.attrs["input_sha256"]) == 64
+    assert meas.read_bytes() == before
+    sets = pyuff.UFF(str(uff)).read_sets()
+    assert len(sets) == 3 * 12
+    for s in sets:
+        ic, ip = s["rsp_node"] - 1, s["ref_node"] - 101
+        assert s["func_type"] == 4
+        assert_allclose(s["x"], r.freq_hz, rtol=1e-5, atol=1e-6)
+        assert_allclose(s["data"], r.H[ic, ip], rtol=1e-9, atol=1e-9 * np.abs(r.H[ic, ip]).max())
+    assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
+
+
+def _meas(force, response):
+    n_c = response.shape[2]
+    return Measurement(force=force, response=response, sample_rate=1000.0,
+                       point_angle=np.linspace(0, 2 * np.pi, force.shape[0], endpoint=False),
+                       channel_name=tuple(f"c{i}" for i in range(n_c)), channel_location=("tread",) * n_c,
+                       channel_angle=np.zeros(n_c))
+
+
+@pytest.mark.parametrize("case, msg", [
+    ("band", r"band 0–900 Hz is outside the data \(0–500 Hz\)"),
+    ("zero force", r"every hit of every point was rejected \(zero force"),
+    ("nan", r"every hit of every point was rejected \(non-finite force samples\)"),
+    ("layout", "is not a measurement"),
+])
+def test_cli_frf_bad_input(tmp_path, case, msg, noisy_sim):
+    p = tmp_path / "m.h5"
+    s = simulate(SimulationConfig(n_points=8, n_hits=2, n_samples=512, sample_rate=1000.0, seed=1, params=s_params()))
+    f, y = np.array(s.measurement.force), np.array(s.measurement.response)
+    args = []
+    if case == "band":
+        args = ["--band", 0, 900]
+    if case == "zero force":
+        f[:] = 0
+    if case == "nan":
+        f[:, :, 10] = np.nan
+    write_measurement(p, _meas(f, y))
+    if case == "layout":
+        run_cli(["frf", p, "-o", tmp_path / "first.h5"])
+        p = tmp_path / "first.h5"
+    before = p.read_bytes()
+    res = run_cli(["frf", p, "-o", tmp_path / "out.h5", *args])
+    assert res.exit_code == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and __import__("re").search(msg, lines[0]), lines
+    assert p.read_bytes() == before and not (tmp_path / "out.h5").exists()
+
+
+def test_nan_in_one_hit_rejects_that_hit(tmp_path):
+    s = simulate(SimulationConfig(n_points=8, n_hits=3, n_samples=512, sample_rate=1000.0, seed=1, params=s_params()))
+    y = np.array(s.measurement.response)
+    y[2, 1, 0, 100] = np.nan
+    r = compute_frf(_meas(np.array(s.measurement.force), y))
+    assert [(x.point, x.hit, x.channel, x.reason) for x in r.rejections] == \
+        [(2, 1, "c0", "non-finite response samples")]
+    assert np.all(np.isfinite(r.H))
+
+
+def test_forms_are_consistent(exact_sim):
+    m = exact_sim.measurement
+    acc = compute_frf(m, FRFOptions(force_window=False))
+    mob = compute_frf(m, FRFOptions(force_window=False, form="mobility"))
+    rec = compute_frf(m, FRFOptions(force_window=False, form="receptance"))
+    assert acc.freq_hz[0] == 0 and mob.freq_hz[0] > 0
+    w = 2 * np.pi * mob.freq_hz
+    assert_allclose(mob.H * 1j * w, acc.H[..., 1:], rtol=1e-12)
+    assert_allclose(rec.H * -(w**2), acc.H[..., 1:], rtol=1e-12)
