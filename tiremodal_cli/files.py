@@ -39,12 +39,14 @@ def check_overwrite(path: str | os.PathLike, overwrite: bool) -> Path:
 def atomic_path(target: str | os.PathLike, *, overwrite: bool = False) -> Iterator[Path]:
     """Yield a temporary path beside ``target``; rename it into place on success.
 
-    On any exception the temporary file is removed and ``target`` is left untouched.
+    The target's folder is created if missing. On any exception the temporary file is
+    removed and ``target`` is left untouched.
     """
     target = check_overwrite(target, overwrite)
     folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise ParameterError(f"output folder {str(folder)!r} does not exist; create it first")
+    if folder.exists() and not folder.is_dir():
+        raise ParameterError(f"output folder {str(folder)!r} is not a folder")
+    folder.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=folder)
     os.close(fd)
     tmp_path = Path(tmp)

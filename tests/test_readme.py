@@ -1,0 +1,29 @@
+"""The README's quick start is what CI runs, and it lists every command."""
+
+from pathlib import Path
+
+from tiremodal_cli.cli.main import cli
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def quick_start_commands():
+    text = (ROOT / "README.md").read_text()
+    section = text.split("## Quick start", 1)[1].split("\n## ", 1)[0]
+    blocks = section.split("```")[1::2]
+    return [b.strip() for b in blocks]
+
+
+def test_two_commands_and_ci_runs_them_verbatim():
+    cmds = quick_start_commands()
+    assert len(cmds) == 2 and all("\n" not in c for c in cmds)
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert cmds[0] in ci and cmds[1] in ci
+    assert ci.index(cmds[0].split(" && ")[-1]) < ci.index(cmds[1].split(" && ")[-1])
+    assert "pytest" in cmds[1]
+
+
+def test_readme_lists_every_command():
+    text = (ROOT / "README.md").read_text()
+    for name in cli.commands:
+        assert f"`tiremodal {name}" in text, name
