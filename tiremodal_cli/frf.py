@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import DataFormatError, ParameterError
-from .hits import clipped_samples, double_hit
+from .hits import _clip_count, double_hit, pulse_extent
 from .windows import exponential_window, force_window
 
 log = logging.getLogger(__name__)
@@ -146,9 +146,12 @@ def estimate(F, Y, *, estimator: str = "H1", axis: int = 0):
     Gff = np.sum(np.abs(F) ** 2, axis=axis)
     Gyy = np.sum(np.abs(Y) ** 2, axis=axis)
     Gfy = np.sum(np.conj(F) * Y, axis=axis)
+    return _from_products(Gfy, Gff, Gyy, estimator)
+
+
+def _from_products(Gfy, Gff, Gyy, estimator):
+    """H1/H2/Hv and γ² from the averaged cross- and auto-spectra (in their precision)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        if Gff.ndim < Gfy.ndim:
-            Gff = np.broadcast_to(Gff, Gfy.shape)
         coh = np.abs(Gfy) ** 2 / (Gff * Gyy)
         if estimator == "H1":
             H = Gfy / Gff
@@ -215,68 +218,86 @@ def _band(freq, band_hz, fs):
     return sel
 
 
-def _leave_one_out_residual(F, Y):
+def _leave_one_out_residual(a, p, e):
     """How well the other hits predict each hit: ``Σ|Y_i − Ĥ_{−i} F_i|² / Σ|Y_i|²``.
 
-    Ĥ_{−i} is the H1 of all hits but i. For consistent hits this is the noise-to-signal
-    energy, the same for every hit; a hit that does not belong stands out against the
-    median of the hits (a channel at a node is noisy for every hit and does not).
+    Ĥ_{−i} = (Σ_j a_j − a_i) / (Σ_j p_j − p_i) is the H1 of all hits but i. For consistent
+    hits this is the noise-to-signal energy, about the same for every hit; a hit that does
+    not belong stands out against the median of the hits (a channel at a node is noisy
+    for every hit and does not). Expanded, |Y − hF|² = e − 2 Re(conj(h) a) + |h|² p, so it
+    needs only the per-hit spectra products the estimate uses anyway.
 
-    F : (n_hits, n_f) ; Y : (n_hits, n_channels, n_f) ; returns (n_hits, n_channels)
+    a : (n_hits, n_channels, n_f) complex   conj(F) Y per hit
+    p : (n_hits, 1, n_f) real               |F|² per hit
+    e : (n_hits, n_channels, n_f) real      |Y|² per hit
+    returns (n_hits, n_channels)
     """
-    gfy = np.conj(F)[:, None, :] * Y
-    gff = np.abs(F) ** 2
-    tot_fy, tot_ff = gfy.sum(axis=0), gff.sum(axis=0)
-    out = np.empty(Y.shape[:2])
-    for i in range(F.shape[0]):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            h = np.where(tot_ff > gff[i], (tot_fy - gfy[i]) / (tot_ff - gff[i]), 0)
-        res = np.sum(np.abs(Y[i] - h * F[i]) ** 2, axis=-1)
-        sig = np.sum(np.abs(Y[i]) ** 2, axis=-1)
-        out[i] = np.where(sig > 0, res / np.where(sig > 0, sig, 1), 0.0)
-    return out
+    A, P = a.sum(axis=0), p.sum(axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        den = P - p
+        h = np.where(den > 0, (A - a) / np.where(den > 0, den, 1), 0)
+    res = np.sum(e - 2 * (h.real * a.real + h.imag * a.imag) + (h.real**2 + h.imag**2) * p, axis=-1)
+    sig = np.sum(e, axis=-1)
+    return np.where(sig > 0, np.clip(res, 0, None) / np.where(sig > 0, sig, 1), 0.0)
 
 
 def _time_checks(f, y, fs, opt, names, ip):
-    """Per-hit checks on one point's records; returns rejections and per-record RMS."""
+    """Per-hit checks on one point's records.
+
+    Returns the rejections, a (n_hits,) mask of rejected hits and the (n_hits, n_channels)
+    record peaks (for the dead-channel test).
+    """
     rej = []
     n_h = f.shape[0]
-    fin_f = np.isfinite(f).all(axis=-1)
-    fin_y = np.isfinite(y).all(axis=-1)  # (n_h, n_c)
-    rms = np.sqrt(np.mean(np.square(np.where(np.isfinite(y), y, 0.0), dtype=float), axis=-1))
+    af, ay = np.abs(f), np.abs(y)
+    pk_f, pk_y = af.max(axis=-1), ay.max(axis=-1)  # NaN and inf propagate: finiteness for free
+    fin_f, fin_y = np.isfinite(pk_f), np.isfinite(pk_y)
+    if not (fin_f.all() and fin_y.all()):
+        f = np.where(np.isfinite(f), f, 0)
+        y = np.where(np.isfinite(y), y, 0)
+        af, ay = np.abs(f), np.abs(y)
+        pk_f, pk_y = af.max(axis=-1), ay.max(axis=-1)
     for h in range(n_h):
         if not fin_f[h]:
             rej.append(Rejection(ip, h, "non-finite force samples", "force"))
         for c in np.flatnonzero(~fin_y[h]):
             rej.append(Rejection(ip, h, "non-finite response samples", names[c]))
+    bad = ~(fin_f & fin_y.all(axis=1))
     if not opt.check_hits:
-        return rej, rms
-    ok = fin_f & fin_y.all(axis=1)
-    fz = np.where(np.isfinite(f), f, 0.0)
-    yz = np.where(np.isfinite(y), y, 0.0)
-    clip_f = clipped_samples(fz) > 0
-    clip_y = clipped_samples(yz) > 0
-    dbl = double_hit(fz, fs, min_relative=opt.double_hit_relative)
+        return rej, bad, pk_y, None
+    extent = pulse_extent(f, fs, peak_index=np.argmax(af, axis=-1))
+    clip_f = _clip_count(af, pk_f) > 0
+    n_at = _clip_count(ay, pk_y)
+    clip_y = n_at > 0
+    const_y = n_at == y.shape[-1]  # every sample at the peak: a flat line
+    dbl = double_hit(f, fs, min_relative=opt.double_hit_relative, extent=extent)
     for h in range(n_h):
-        if not ok[h]:
+        if bad[h]:
             continue
-        if np.max(np.abs(fz[h])) == 0:
+        if pk_f[h] == 0:
             rej.append(Rejection(ip, h, "zero force (no impact recorded)", "force"))
+            bad[h] = True
             continue
+        reasons = []
         if clip_f[h]:
-            rej.append(Rejection(ip, h, "clipped (overloaded) force", "force"))
-        for c in np.flatnonzero(clip_y[h]):
-            rej.append(Rejection(ip, h, "clipped (overloaded) response", names[c]))
+            reasons.append(Rejection(ip, h, "clipped (overloaded) force", "force"))
+        for c in np.flatnonzero(const_y[h]):
+            reasons.append(Rejection(ip, h, "dead record (constant samples)", names[c]))
+        for c in np.flatnonzero(clip_y[h] & ~const_y[h]):
+            reasons.append(Rejection(ip, h, "clipped (overloaded) response", names[c]))
         if dbl[h]:
-            rej.append(Rejection(ip, h, "double hit", "force"))
-    return rej, rms
+            reasons.append(Rejection(ip, h, "double hit", "force"))
+        rej += reasons
+        bad[h] = bool(reasons)
+    return rej, bad, pk_y, extent
 
 
 def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResult:
     """The FRF stage: checks, windows, spectra and averaging over the accepted hits.
 
-    Works point by point, so ``m.force``/``m.response`` may be lazy (h5py datasets) and
-    memory stays at a few points' records.
+    One pass, point by point, so ``m.force``/``m.response`` may be lazy (h5py datasets)
+    and memory stays at one point's records. float32 records are transformed in single
+    precision (as recorded), float64 ones in double.
 
     Parameters
     ----------
@@ -291,74 +312,73 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
     Raises
     ------
     DataFormatError
-        Every hit of every point rejected, or zero force at a point.
+        Every hit of every point rejected (zero or non-finite force, all clipped, ...).
     """
     opt.check()
     fs, ns = float(m.sample_rate), int(m.n_samples)
     freq = np.fft.rfftfreq(ns, 1 / fs)
     sel = _band(freq, opt.band_hz, fs)
+    lo, hi = np.flatnonzero(sel)[[0, -1]]
     names = tuple(m.channel_name)
     n_p, n_h, n_c = m.n_points, m.n_hits, m.n_channels
+    real = np.float32 if m.response.dtype == np.float32 and m.force.dtype == np.float32 else np.float64
     exp_w, tau = (exponential_window(ns, fs, end_value=opt.exp_end, tau_s=opt.exp_tau_s)
                   if (opt.exp_end or opt.exp_tau_s) else (None, None))
-    total = 2 * n_p
-    # pass 1: time-domain checks and record RMS (for dead records and channels)
-    rejections, rms, spread = [], np.zeros((n_p, n_h, n_c)), np.zeros((n_p, n_h, n_c))
-    for ip in range(n_p):
-        y = np.asarray(m.response[ip])
-        r, rms[ip] = _time_checks(np.asarray(m.force[ip]), y, fs, opt, names, ip)
-        spread[ip] = np.ptp(np.where(np.isfinite(y), y, 0.0), axis=-1)
-        rejections += r
-        if progress:
-            progress(ip + 1, total)
-    med = np.median(rms.reshape(-1, n_c), axis=0)
-    dead_ch = tuple(names[c] for c in range(n_c)
-                    if med[c] <= opt.dead_channel_relative * med.max() or np.all(spread[..., c] == 0))
-    for name in dead_ch:
-        rejections.append(Rejection(None, None, "dead channel (no signal in any hit)", name))
-    live = np.array([n not in dead_ch for n in names])
-    if opt.check_hits:
-        # a record that does not move at all is a dead sensor or cable in that hit; a small
-        # one is not (a sensor at a node of the response records noise, and that is data)
-        for ip, h, c in zip(*np.nonzero((spread == 0) & live)):
-            rejections.append(Rejection(int(ip), int(h), "dead record (constant samples)", names[c]))
-    bad = np.zeros((n_p, n_h), dtype=bool)
-    for r in rejections:
-        if r.hit is not None:
-            bad[r.point, r.hit] = True
-    # pass 2: spectra, hit-consistency check, averaging
-    nf = int(sel.sum())
+    if exp_w is not None:
+        exp_w = exp_w.astype(real)
+    nf = hi - lo + 1
     H = np.full((n_c, n_p, nf), np.nan + 0j)
     coh = np.full((n_c, n_p, nf), np.nan)
     n_avg = np.zeros(n_p, dtype=int)
+    rejections, peaks = [], np.zeros((n_p, n_h, n_c))
     for ip in range(n_p):
-        acc = np.flatnonzero(~bad[ip])
+        f = np.asarray(m.force[ip], dtype=real)
+        y = np.asarray(m.response[ip], dtype=real)
+        rej, bad, peaks[ip], extent = _time_checks(f, y, fs, opt, names, ip)
+        rejections += rej
+        acc = np.flatnonzero(~bad)
         if acc.size:
-            f = np.asarray(m.force[ip][acc], dtype=float)
-            y = np.asarray(m.response[ip][acc], dtype=float)
+            if extent is not None and opt.force_window_s is None:
+                extent = (extent[0][acc], extent[1][acc])
+            else:
+                extent = None
+            if acc.size < n_h:
+                f, y = f[acc], y[acc]
             if opt.force_window:
-                f = f * force_window(f, fs, length_s=opt.force_window_s, taper_s=opt.taper_s)
+                f = f * force_window(f, fs, length_s=opt.force_window_s, taper_s=opt.taper_s, extent=extent)
             if exp_w is not None:
                 f = f * exp_w
                 y = y * exp_w
-            F = np.fft.rfft(f, axis=-1)[:, sel]
-            Y = np.fft.rfft(y, axis=-1)[:, :, sel]
+            F = np.fft.rfft(f, axis=-1)[:, lo:hi + 1]
+            Y = np.fft.rfft(y, axis=-1)[:, :, lo:hi + 1]
+            a = np.conj(F)[:, None, :] * Y  # per-hit products, shared by check and estimate
+            p = (F.real**2 + F.imag**2)[:, None, :]
+            e = Y.real**2 + Y.imag**2
             if opt.check_hits and acc.size >= 3:
-                d = _leave_one_out_residual(F, Y[:, live])
-                ratio = d / np.median(d, axis=0, keepdims=True)
+                # a statistic, not an estimate: every k-th line (≤ 1024 of them) tells as much
+                k = max(1, a.shape[-1] // 1024)
+                d = _leave_one_out_residual(a[..., ::k], p[..., ::k], e[..., ::k])
+                ratio = d / np.maximum(np.median(d, axis=0, keepdims=True), np.finfo(float).tiny)
                 flag = (d > opt.hit_residual_max) & (ratio > opt.hit_residual_ratio)
-                for k in np.flatnonzero(flag.any(axis=1)):
-                    c = np.flatnonzero(live)[np.argmax(np.where(flag[k], ratio[k], -np.inf))]
-                    rejections.append(Rejection(ip, int(acc[k]), "poor consistency with the other hits "
-                                                f"(residual {d[k, list(np.flatnonzero(live)).index(c)]:.2f} of its "
-                                                f"energy, {ratio[k].max():.1f}× the hits' median)", names[c]))
+                for i in np.flatnonzero(flag.any(axis=1)):
+                    c = int(np.argmax(np.where(flag[i], ratio[i], -np.inf)))
+                    rejections.append(Rejection(ip, int(acc[i]), "poor consistency with the other hits "
+                                                f"(residual {d[i, c]:.2f} of its energy, {ratio[i, c]:.1f}× the "
+                                                "hits' median)", names[c]))
                 keep = ~flag.any(axis=1)
-                F, Y, acc = F[keep], Y[keep], acc[keep]
+                if not keep.all():
+                    a, p, e, acc = a[keep], p[keep], e[keep], acc[keep]
             if acc.size:
-                H[:, ip], coh[:, ip] = estimate(F[:, None, :], Y, estimator=opt.estimator)
+                H[:, ip], coh[:, ip] = _from_products(a.sum(axis=0), p.sum(axis=0), e.sum(axis=0),
+                                                      opt.estimator)
         n_avg[ip] = acc.size
         if progress:
-            progress(n_p + ip + 1, total)
+            progress(ip + 1, n_p)
+    med = np.median(peaks.reshape(-1, n_c), axis=0)
+    dead_ch = tuple(names[c] for c in range(n_c) if med[c] <= opt.dead_channel_relative * med.max())
+    for name in dead_ch:
+        rejections.append(Rejection(None, None, "dead channel (no signal in any hit)", name))
+    live = np.array([n not in dead_ch for n in names])
     H[~live] = np.nan
     coh[~live] = np.nan
     failed = np.flatnonzero(n_avg == 0)
@@ -366,7 +386,7 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
         reasons = sorted({r.reason for r in rejections if r.hit is not None})
         raise DataFormatError(f"every hit of every point was rejected ({'; '.join(reasons)})")
     for ip in failed:
-        log.warning("point %d (%.1f°): all %d hits rejected; the point is left out", ip,
+        log.warning("point %d (%.1f°): all %d hits rejected; the point is left out", ip + 1,
                     np.rad2deg(m.point_angle[ip]), n_h)
     keep_p = n_avg > 0
     lines, Hf = convert_form(freq[sel], H[:, keep_p], opt.form)
@@ -377,7 +397,7 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
                              if opt.force_window_s is None else "given"},
             "exponential_window": None if tau is None else {"tau_s": tau, "end_value": float(exp_w[-1]),
                                                             "added_decay_rate_per_s": 1.0 / tau},
-            "failed_points": [int(i) for i in failed]}
+            "failed_points": [int(i) for i in failed], "precision": np.dtype(real).name}
     return FRFResult(freq_hz=fq, H=Hf, coherence=coh, n_averages=n_avg[keep_p],
                      point_index=np.flatnonzero(keep_p), point_angle=np.asarray(m.point_angle)[keep_p],
                      channel_name=names, channel_location=tuple(m.channel_location),

@@ -7,9 +7,8 @@ FRF stage (:mod:`tiremodal_cli.frf`) adds the coherence check and decides what t
 from __future__ import annotations
 
 import numpy as np
-import scipy.signal
 
-__all__ = ["clipped_samples", "is_clipped", "double_hit", "dead", "pulse_extent"]
+__all__ = ["clipped_samples", "is_clipped", "double_hit", "pulse_extent"]
 
 
 def clipped_samples(x, *, axis=-1, min_run: int = 2, min_count: int = 3, rtol: float = 1e-6) -> np.ndarray:
@@ -19,26 +18,30 @@ def clipped_samples(x, *, axis=-1, min_run: int = 2, min_count: int = 3, rtol: f
     record has several samples at exactly its maximum absolute value: a run of
     ``min_run`` adjacent ones, or ``min_count`` anywhere (a response that swings through
     the limit several times between samples). Unclipped records almost never tie at
-    their peak. Records that are not clipped count 0.
+    their peak. A flat record (every sample at its peak) counts too; the FRF stage calls
+    it dead. Records that are not clipped count 0.
 
     Parameters
     ----------
-    x : (..., n_samples) array
+    x : (..., n_samples) array, finite
     Returns
     -------
     count : (...) ndarray of int   samples at the limit in clipped records, else 0
     """
-    x = np.moveaxis(np.asarray(x), axis, -1)
-    a = np.abs(x)
-    peak = np.max(a, axis=-1, keepdims=True)
-    at = (a >= peak * (1 - rtol)) & (peak > 0)
-    count = at.sum(axis=-1)
+    a = np.abs(np.moveaxis(np.asarray(x), axis, -1))
+    return _clip_count(a, a.max(axis=-1), min_run=min_run, min_count=min_count, rtol=rtol)
+
+
+def _clip_count(a, peak, *, min_run=2, min_count=3, rtol=1e-6):
+    """:func:`clipped_samples` from |x| and its peak (for callers that have them)."""
+    at = a >= (peak * (1 - rtol))[..., None]
+    count = np.where(peak > 0, np.count_nonzero(at, axis=-1), 0)
     run = np.zeros(count.shape, dtype=bool)
-    maybe = count >= 2
-    if maybe.any():
-        sub = at[maybe]
+    few = (count >= 2) & (count < min_count)  # only these need the adjacency test
+    if few.any():
+        sub = at[few]
         win = np.lib.stride_tricks.sliding_window_view(sub, min_run, axis=-1).all(axis=-1)
-        run[maybe] = win.any(axis=-1)
+        run[few] = win.any(axis=-1)
     return np.where(run | (count >= min_count), count, 0)
 
 
@@ -47,33 +50,44 @@ def is_clipped(x, *, axis=-1) -> np.ndarray:
     return clipped_samples(x, axis=axis) > 0
 
 
-def pulse_extent(force, fs: float, *, threshold: float = 0.05):
+def pulse_extent(force, fs: float, *, threshold: float = 0.05, max_s: float = 0.05, peak_index=None):
     """Start and end sample of the main pulse of each force record.
 
-    The pulse spans the samples around the peak where |f| stays above ``threshold`` × peak.
+    The pulse spans the samples around the peak where |f| stays above ``threshold`` ×
+    peak, searched within ``max_s`` of the peak (a hammer pulse lasts milliseconds).
+    ``peak_index`` (…,) may give the peak's sample when the caller has it.
 
     Returns
     -------
     start, stop : (...) ndarray of int     stop is exclusive
     """
-    f = np.asarray(force, dtype=float)
-    a = np.abs(f)
-    ipk = np.argmax(a, axis=-1)
-    pk = np.take_along_axis(a, ipk[..., None], -1)
-    above = a >= threshold * pk
-    n = f.shape[-1]
-    idx = np.arange(n)
-    below_before = np.where(~above & (idx <= ipk[..., None]), idx, -1).max(axis=-1)
-    below_after = np.where(~above & (idx >= ipk[..., None]), idx, n).min(axis=-1)
-    return below_before + 1, below_after
+    f = np.asarray(force)
+    flat = f.reshape(-1, f.shape[-1])
+    n = flat.shape[-1]
+    reach = max(2, int(max_s * fs))
+    start = np.zeros(flat.shape[0], dtype=int)
+    stop = np.zeros(flat.shape[0], dtype=int)
+    ipks = (np.argmax(np.abs(flat), axis=-1) if peak_index is None
+            else np.asarray(peak_index).reshape(-1))
+    for i, rec in enumerate(flat):  # a local search per record: a few samples, not the record
+        ipk = int(ipks[i])
+        lim = threshold * abs(rec[ipk])
+        lo = max(0, ipk - reach)
+        seg = np.abs(rec[lo:min(n, ipk + reach)]) < lim
+        k = ipk - lo
+        before = np.flatnonzero(seg[:k])
+        after = np.flatnonzero(seg[k:])
+        start[i] = lo + (before[-1] + 1 if before.size else 0)
+        stop[i] = lo + k + (after[0] if after.size else seg.size - k)
+    return start.reshape(f.shape[:-1]), stop.reshape(f.shape[:-1])
 
 
-def double_hit(force, fs: float, *, min_relative: float = 0.2, min_gap_s: float = 1.0e-3) -> np.ndarray:
+def double_hit(force, fs: float, *, min_relative: float = 0.2, extent=None) -> np.ndarray:
     """True for force records with a second blow.
 
-    After the main pulse has ended, a later positive peak of at least ``min_relative`` of
-    the main peak (found with :func:`scipy.signal.find_peaks`, at least ``min_gap_s``
-    apart) is a second impact: the hammer bounced. Only positive peaks count: a hammer
+    After the main pulse has ended (:func:`pulse_extent`), a later sample of the blow's
+    sign reaching ``min_relative`` of the main peak is a second impact: the hammer
+    bounced. Only the blow's sign counts: a hammer
     pushes, while the anti-alias filter's ringing after a short pulse swings both ways
     (an 8th-order Butterworth at 0.4 fs rings to about +7 % after a 1 ms pulse at 2 kHz).
 
@@ -81,31 +95,22 @@ def double_hit(force, fs: float, *, min_relative: float = 0.2, min_gap_s: float 
     ----------
     force : (..., n_samples) array, N
     fs : float, Hz
+    extent : (start, stop), optional       :func:`pulse_extent` of the records, if known
     """
-    f = np.asarray(force, dtype=float)
+    f = np.asarray(force)
     flat = f.reshape(-1, f.shape[-1])
     out = np.zeros(flat.shape[0], dtype=bool)
-    start, stop = pulse_extent(flat, fs)
-    gap = max(1, int(round(min_gap_s * fs)))
+    start, stop = pulse_extent(flat, fs) if extent is None else (np.ravel(extent[0]), np.ravel(extent[1]))
     for i, rec in enumerate(flat):
-        pk = np.max(np.abs(rec))
+        seg = rec[start[i]:stop[i]]
+        if seg.size == 0 or stop[i] >= rec.size:
+            continue
+        ipk = start[i] + int(np.argmax(np.abs(seg)))
+        pk = abs(float(rec[ipk]))
         if pk == 0:
             continue
-        tail = rec[stop[i]:] * np.sign(rec[np.argmax(np.abs(rec))])
-        peaks, _ = scipy.signal.find_peaks(tail, height=min_relative * pk, distance=gap)
-        out[i] = peaks.size > 0
+        # the highest later sample of the blow's sign: any such maximum is a peak of the tail
+        tail = rec[stop[i]:]
+        later = tail.max() if rec[ipk] > 0 else -tail.min()
+        out[i] = later >= min_relative * pk
     return out.reshape(f.shape[:-1])
-
-
-def dead(x, *, axis=-1, relative: float = 1e-3) -> np.ndarray:
-    """True for records whose RMS is below ``relative`` × the median RMS of their channel.
-
-    Parameters
-    ----------
-    x : (n_points, n_hits, n_channels, n_samples) array
-        Response records; the median is taken per channel over points and hits.
-    """
-    x = np.asarray(x)
-    rms = np.sqrt(np.mean(np.square(x, dtype=float), axis=axis))
-    ref = np.median(rms.reshape(-1, rms.shape[-1]), axis=0)
-    return rms < relative * ref

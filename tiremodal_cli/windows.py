@@ -19,7 +19,7 @@ __all__ = ["force_window", "exponential_window", "correct_damping", "correct_pol
 
 
 def force_window(force, fs: float, *, length_s: float | None = None, taper_s: float | None = None,
-                 threshold: float = 0.05) -> np.ndarray:
+                 threshold: float = 0.05, extent=None) -> np.ndarray:
     """Force windows for a stack of records.
 
     Parameters
@@ -27,19 +27,21 @@ def force_window(force, fs: float, *, length_s: float | None = None, taper_s: fl
     force : (..., n_samples) array, N
     fs : float, Hz
     length_s : float, optional, keyword-only
-        Length of the flat part from the pulse start, s. Default: from the pulse itself,
-        its extent above ``threshold`` × peak plus as much again after it (the
+        Length of the flat part, s, from one sample before the pulse. Default: from the
+        pulse itself, its extent above ``threshold`` × peak doubled (room for the
         anti-alias filter's ringing), and at least 8 samples.
     taper_s : float, optional, keyword-only
         Length of each cosine taper, s (default: 4 samples).
+    extent : (start, stop), optional
+        :func:`~tiremodal_cli.hits.pulse_extent` of the records, if the caller has it.
 
     Returns
     -------
     w : (..., n_samples) ndarray, same leading shape as ``force``
     """
-    f = np.asarray(force, dtype=float)
+    f = np.asarray(force)
     n = f.shape[-1]
-    start, stop = pulse_extent(f, fs, threshold=threshold)
+    start, stop = pulse_extent(f, fs, threshold=threshold) if extent is None else extent
     if length_s is None:
         length = np.maximum(2 * (stop - start), 8)
     else:
@@ -47,14 +49,17 @@ def force_window(force, fs: float, *, length_s: float | None = None, taper_s: fl
             raise ParameterError(f"force window length_s={length_s} must be > 0 s")
         length = np.full(start.shape, int(round(length_s * fs)))
     taper = 4 if taper_s is None else max(1, int(round(taper_s * fs)))
-    t = np.arange(n)
-    a = (start - 1)[..., None]  # first flat sample is start - 1 (a sample of margin)
-    b = (start - 1 + length)[..., None]
-    w = ((t >= a) & (t < b)).astype(float)
-    rise = (t >= a - taper) & (t < a)
-    fall = (t >= b) & (t < b + taper)
-    w = np.where(rise, 0.5 * (1 - np.cos(np.pi * (t - (a - taper)) / taper)), w)
-    w = np.where(fall, 0.5 * (1 + np.cos(np.pi * (t - b + 1) / (taper + 1))), w)
+    rise = 0.5 * (1 - np.cos(np.pi * np.arange(taper) / taper))
+    fall = rise[::-1]
+    w = np.zeros(f.shape, dtype=f.dtype if f.dtype.kind == "f" else float)
+    flat = w.reshape(-1, n)
+    for i, (a, ln) in enumerate(zip((start - 1).ravel(), length.ravel())):
+        a, b = max(int(a), 0), min(int(a + ln), n)  # the window is short: fill it, leave zeros
+        flat[i, a:b] = 1.0
+        lo = max(a - taper, 0)
+        flat[i, lo:a] = rise[taper - (a - lo):]
+        hi = min(b + taper, n)
+        flat[i, b:hi] = fall[:hi - b]
     return w
 
 
