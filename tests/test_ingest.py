@@ -97,3 +97,18 @@ def test_csv_errors(tmp_path, sim):
     (tmp_path / "csv" / "point01_hit2.csv").unlink()
     with pytest.raises(Exception, match="different numbers of hits"):
         read_csv_folder(tmp_path / "csv", {n: (n, "tread", 0.0) for n in sim.channel_name})
+
+
+def test_bundled_uff_sample_is_the_bundled_measurement(tmp_path):
+    """sample_data/uff (UFF 58, binary) ingests to exactly sample_data/gl073a_sim.h5."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1] / "sample_data"
+    res = run_cli(["ingest", root / "uff", "-o", tmp_path / "m.h5", "--mapping", root / "uff" / "mapping.toml",
+                   "--json"])
+    assert res.exit_code == 0, res.output
+    a, b = read_measurement(tmp_path / "m.h5"), read_measurement(root / "gl073a_sim.h5")
+    assert_array_equal(a.force, b.force.astype(float))
+    assert_array_equal(a.response, b.response.astype(float))
+    assert_allclose(a.point_angle, b.point_angle, atol=1e-9)
+    assert a.sample_rate == b.sample_rate and a.channel_name == b.channel_name
