@@ -1,0 +1,43 @@
+"""Modal assurance criterion (Allemang & Brown 1982).
+
+``MAC(a, b) = |aᴴ b|² / ((aᴴ a)(bᴴ b))``, for complex shapes; 1 for proportional shapes,
+0 for orthogonal ones. Shapes are rows: ``(n_modes, n_dof)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["mac", "mac_matrix"]
+
+
+def mac(a, b) -> float:
+    """MAC of two shape vectors (any shape; flattened)."""
+    a = np.ravel(a)
+    b = np.ravel(b)
+    den = np.vdot(a, a).real * np.vdot(b, b).real
+    return float(abs(np.vdot(a, b)) ** 2 / den) if den > 0 else 0.0
+
+
+def mac_matrix(A, B=None) -> np.ndarray:
+    """MAC between every row of A and every row of B (AutoMAC when B is None).
+
+    Parameters
+    ----------
+    A : (n_a, n_dof) array ; B : (n_b, n_dof) array, optional
+
+    Returns
+    -------
+    (n_a, n_b) ndarray in [0, 1]
+    """
+    A = np.atleast_2d(np.asarray(A))
+    B = A if B is None else np.atleast_2d(np.asarray(B))
+    if A.shape[1] != B.shape[1]:
+        from .errors import ParameterError
+
+        raise ParameterError(f"shapes have {A.shape[1]} and {B.shape[1]} degrees of freedom; "
+                             "MAC needs the same")
+    num = np.abs(A.conj() @ B.T) ** 2
+    den = np.outer(np.sum(np.abs(A) ** 2, axis=1), np.sum(np.abs(B) ** 2, axis=1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(den > 0, num / np.where(den > 0, den, 1), 0.0)

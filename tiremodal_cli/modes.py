@@ -1,0 +1,244 @@
+"""The modal stage: FRFs → poles (LSCE + stabilization) → shapes (LSFD) → a modal table.
+
+General for any structure. For a tyre (points around the tread with angles), the FRFs are
+first split into circumferential orders (:mod:`tiremodal_cli.spatial`) and each order is
+swept on its own; the poles of all orders then get their shapes from one LSFD over the
+physical FRFs. Damping is corrected for the exponential window recorded in the FRF file.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import DataFormatError, ParameterError
+from .lsce import poles_to_modal, principal_responses, sweep
+from .lsfd import lsfd, mpc, significance
+from .spatial import decompose
+from .stabilization import Diagram, StabilizationOptions, stabilize
+from .windows import correct_poles
+
+log = logging.getLogger(__name__)
+
+__all__ = ["ModalOptions", "ModalResult", "estimate_modes", "is_circumferential"]
+
+
+@dataclass(frozen=True)
+class ModalOptions:
+    """Options of the modal stage.
+
+    band_hz : analysis band (default: the FRFs' lines above 0 Hz)
+    max_order : highest model order of the sweep (orders 2 … max_order)
+    spatial : "auto" (split into circumferential orders when the points go round a tread),
+              "on" or "off"
+    min_significance : reject a mode explaining less than this share of the response at
+              its own frequency (a pole fitted to noise)
+    """
+
+    band_hz: tuple[float, float] | None = None
+    max_order: int = 120
+    spatial: str = "auto"
+    min_significance: float = 0.05
+    stabilization: StabilizationOptions = StabilizationOptions()
+    rtol_svd: float = 1e-4
+
+    def check(self):
+        if self.spatial not in ("auto", "on", "off"):
+            raise ParameterError(f"spatial={self.spatial!r}; allowed: auto, on, off")
+        if not 2 <= self.max_order <= 400:
+            raise ParameterError(f"max_order={self.max_order} must be 2 … 400")
+
+
+@dataclass(frozen=True)
+class ModalResult:
+    """Modes found in a set of FRFs.
+
+    Attributes
+    ----------
+    freq_hz, damping_ratio : (n_modes,) ndarray     structural (window-corrected) values
+    poles : (n_modes,) complex ndarray              as estimated from the FRFs, rad/s
+    shapes : (n_modes, n_channels, n_points) complex ndarray   LSFD residues
+    mpc, significance : (n_modes,) ndarray
+    group : (n_modes,) ndarray of int               circumferential order group (−1: none)
+    fit_error : (n_channels, n_points) ndarray      ‖H − Ĥ‖/‖H‖ over the band
+    synthesis : (n_channels, n_points, n_band) complex ndarray
+    band_freq_hz : (n_band,) ndarray
+    diagrams : list of (group, Diagram)
+    rejected : list of dict                         modes dropped after LSFD, with reasons
+    """
+
+    freq_hz: np.ndarray
+    damping_ratio: np.ndarray
+    poles: np.ndarray
+    shapes: np.ndarray
+    mpc: np.ndarray
+    significance: np.ndarray
+    group: np.ndarray
+    fit_error: np.ndarray
+    synthesis: np.ndarray
+    band_freq_hz: np.ndarray
+    diagrams: list = field(default_factory=list)
+    rejected: list = field(default_factory=list)
+    meta: dict = field(default_factory=dict)
+
+
+def is_circumferential(point_angle, channel_location) -> bool:
+    """True when the points go round the tread (≥ 8 distinct angles spanning > 270°) and a
+    tread channel exists: the data of a tyre test."""
+    a = np.mod(np.asarray(point_angle, dtype=float), 2 * np.pi)
+    if a.size < 8 or "tread" not in tuple(channel_location) or not np.all(np.isfinite(a)):
+        return False
+    gaps = np.diff(np.sort(np.concatenate([a, a[:1] + 2 * np.pi])))
+    return len(np.unique(np.round(a, 9))) >= 8 and gaps.max() < np.pi / 2
+
+
+def _band(freq_hz, band_hz):
+    if band_hz is not None:
+        return band_hz
+    pos = freq_hz[freq_hz > 0]
+    if pos.size < 16:
+        raise DataFormatError("fewer than 16 lines above 0 Hz")
+    return (float(pos[0]), float(pos[-1]))
+
+
+def estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="accelerance",
+                   exp_tau_s=None, opt: ModalOptions = ModalOptions(), progress=None) -> ModalResult:
+    """Modal parameters of a set of FRFs.
+
+    Parameters
+    ----------
+    freq_hz : (n_freq,) array, Hz
+    H : (n_channels, n_points, n_freq) complex array
+    point_angle : (n_points,) array, rad, optional
+    channel_location : sequence of str, optional
+    form : FRF form of H
+    exp_tau_s : float, optional — exponential window to correct the damping for
+    opt : ModalOptions
+    progress : callable(done, total), optional
+
+    Returns
+    -------
+    ModalResult
+    """
+    opt.check()
+    freq_hz = np.asarray(freq_hz, dtype=float)
+    H = np.asarray(H)
+    if H.ndim != 3 or H.shape[-1] != freq_hz.size:
+        raise DataFormatError(f"FRFs must be (n_channels, n_points, n_freq={freq_hz.size}); got {H.shape}")
+    live = np.array([np.all(np.isfinite(H[c])) for c in range(H.shape[0])])
+    if not live.any():
+        raise DataFormatError("no channel has finite FRFs")
+    band = _band(freq_hz, opt.band_hz)
+    sel = principal_responses(freq_hz, H[live].reshape(-1, freq_hz.size), band, rtol=opt.rtol_svd)
+    lines = (freq_hz >= sel.freq_hz[0] - 1e-9) & (freq_hz <= sel.freq_hz[-1] + 1e-9)
+    k_lines = freq_hz[lines]
+    Hb = H[live][:, :, lines]
+    n_live, n_p = Hb.shape[:2]
+    spatial = opt.spatial == "on" or (opt.spatial == "auto" and point_angle is not None
+                                      and is_circumferential(point_angle, channel_location))
+    if spatial:
+        groups = decompose(Hb, point_angle)
+        group_max = min(opt.max_order, 40)  # an order holds a few modes: 40 is plenty
+    else:
+        groups = {-1: (Hb.reshape(-1, lines.sum()), np.eye(n_live * n_p))}
+        group_max = opt.max_order
+    if group_max + 1 > lines.sum() // 2:
+        raise ParameterError(f"model order {group_max} is too high for {lines.sum()} lines in the band "
+                             f"(allowed up to {lines.sum() // 2 - 1})")
+    diagrams, found, rejected = [], [], []
+    synth = np.zeros((n_live * n_p, lines.sum()), dtype=complex)
+    for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
+        b = principal_responses(k_lines, rows, None, rtol=opt.rtol_svd)
+        d = stabilize(b, sweep(b, range(2, group_max + 1)), opt.stabilization)
+        diagrams.append((g, d))
+        s = np.array([c.representative.s for c in d.selected()], dtype=complex)
+        fit, s, rej = _fit_group(k_lines, rows, s, form, opt, g)
+        rejected += rej
+        if fit is not None:
+            synth += back @ fit.synthesis
+            for k in range(s.size):
+                phys = back @ fit.residues[:, k]
+                found.append((s[k], g, phys, float(fit.significance[k])))
+        if progress:
+            progress(i + 1, len(groups))
+    if not found:
+        raise DataFormatError("no stable mode found in the band; widen the band or raise --max-order")
+    modes = _merge(found, opt)
+    s = np.array([m[0] for m in modes])
+    shapes = np.full((s.size, H.shape[0], n_p), np.nan + 0j)
+    shapes[:, live] = np.array([m[2] for m in modes]).reshape(s.size, n_live, n_p)
+    Hflat = Hb.reshape(-1, lines.sum())
+    err = np.full((H.shape[0], n_p), np.nan)
+    err[live] = (np.linalg.norm(Hflat - synth, axis=1) /
+                 np.maximum(np.linalg.norm(Hflat, axis=1), np.finfo(float).tiny)).reshape(n_live, n_p)
+    syn = np.full((H.shape[0], n_p, lines.sum()), np.nan + 0j)
+    syn[live] = synth.reshape(n_live, n_p, -1)
+    f_true, z_true = poles_to_modal(correct_poles(s, exp_tau_s))
+    return ModalResult(freq_hz=f_true, damping_ratio=z_true, poles=s, shapes=shapes,
+                       mpc=np.array([mpc(m[2]) for m in modes]),
+                       significance=np.array([m[3] for m in modes]),
+                       group=np.array([m[1] for m in modes]), fit_error=err, synthesis=syn,
+                       band_freq_hz=k_lines, diagrams=diagrams, rejected=rejected,
+                       meta={"band_hz": [float(k_lines[0]), float(k_lines[-1])], "spatial": bool(spatial),
+                             "max_order": int(group_max), "exp_tau_s": exp_tau_s,
+                             "order_energy": [m[4] for m in modes]})
+
+
+@dataclass(frozen=True)
+class _GroupFit:
+    residues: np.ndarray
+    synthesis: np.ndarray
+    significance: np.ndarray
+
+
+def _fit_group(freq, rows, s, form, opt, g):
+    """LSFD of one group's rows; drop insignificant poles and refit until settled."""
+    rejected = []
+    for _ in range(20):
+        if s.size == 0:
+            return None, s, rejected
+        fit = lsfd(freq, rows, s, form=form)
+        sig = significance(freq, rows, fit.residues, s, form=form)
+        weak = np.flatnonzero(sig < opt.min_significance)
+        if weak.size == 0:
+            return _GroupFit(fit.residues, fit.synthesis, sig), s, rejected
+        r = weak[np.argmin(sig[weak])]  # one at a time: the others may gain once it is gone
+        f_r, z_r = poles_to_modal(s[r])
+        rejected.append({"frequency_hz": float(f_r), "damping_ratio": float(z_r), "group": int(g),
+                         "reason": f"insignificant: explains {100 * sig[r]:.1f} % of the response "
+                                   "at its frequency"})
+        s = np.delete(s, r)
+    return _GroupFit(fit.residues, fit.synthesis, sig), s, rejected
+
+
+def _merge(found, opt):
+    """One mode per physical pole: poles of different groups within 0.2 % in frequency and
+    20 % in damping are one mode seen in several orders (leakage, coupling); its shape is
+    the sum of the groups' shares, its pole the dominant group's.
+
+    Returns list of (s, group, physical residues, significance, {group: energy share}).
+    """
+    fn, zeta = poles_to_modal(np.array([f[0] for f in found]))
+    energy = np.array([np.linalg.norm(f[2]) ** 2 for f in found])
+    used = np.zeros(len(found), dtype=bool)
+    out = []
+    for i in np.argsort(-energy):
+        if used[i]:
+            continue
+        same = [j for j in range(len(found)) if not used[j] and found[j][1] != found[i][1] or j == i]
+        same = [j for j in same if abs(fn[j] - fn[i]) <= 2e-3 * fn[i] and abs(zeta[j] - zeta[i]) <= 0.2 * zeta[i]]
+        groups_seen = {}
+        for j in same:
+            if found[j][1] in groups_seen and j != i:
+                continue
+            groups_seen[found[j][1]] = j
+        phys = sum(found[j][2] for j in groups_seen.values())
+        tot = sum(energy[j] for j in groups_seen.values())
+        for j in groups_seen.values():
+            used[j] = True
+        out.append((found[i][0], found[i][1], phys, found[i][3],
+                    {int(found[j][1]): float(energy[j] / tot) for j in groups_seen.values()}))
+    out.sort(key=lambda m: abs(m[0]))
+    return out
