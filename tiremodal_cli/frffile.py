@@ -147,3 +147,49 @@ def describe_frf(path: str | os.PathLike) -> dict:
             "channels": list(r.channel_name), "dead_channels": list(r.dead_channels),
             "n_averages_min": int(r.n_averages.min()), "n_rejections": len(r.rejections),
             "exp_tau_s": r.exp_tau_s, **src}
+
+
+_FORM_OF_SPEC = {12: "accelerance", 11: "mobility", 8: "receptance"}
+
+
+def read_frf_uff(path, *, channels: dict | None = None, points: dict | None = None) -> FRFResult:
+    """FRFs from UFF dataset 58 (function type 4), e.g. exported by other modal software.
+
+    Channels are the response DOFs ``"node:dir"``, points the reference DOFs (their node);
+    a mapping (as for ``ingest``) gives names, locations and angles. Without one, angles are
+    unknown (NaN) and locations ``"unknown"``: the data are treated as any structure's.
+    The form follows the ordinate type (12 acceleration, 11 velocity, 8 displacement).
+    """
+    where = str(path)
+    try:
+        sets = pyuff.UFF(str(path)).read_sets()
+    except Exception as exc:  # pyuff raises bare Exception/ValueError/IndexError on bad files
+        raise DataFormatError(f"{where}: not a readable UFF file ({exc.__class__.__name__}: {exc})") from None
+    sets = [sets] if isinstance(sets, dict) else list(sets)
+    frfs = [s for s in sets if s.get("type") == 58 and int(s.get("func_type", 0)) == 4]
+    if not frfs:
+        raise DataFormatError(f"{where}: no FRF (dataset 58, function type 4)")
+    x0 = np.asarray(frfs[0]["x"], dtype=float)
+    spec = {int(s.get("ordinate_spec_data_type", 12) or 12) for s in frfs}
+    if len(spec) != 1 or spec.pop() not in _FORM_OF_SPEC:
+        raise DataFormatError(f"{where}: FRFs must share one ordinate type among 12, 11, 8")
+    form = _FORM_OF_SPEC[int(frfs[0].get("ordinate_spec_data_type", 12) or 12)]
+    rsp = sorted({(int(s["rsp_node"]), int(s["rsp_dir"])) for s in frfs})
+    ref = sorted({int(s["ref_node"]) for s in frfs})
+    H = np.full((len(rsp), len(ref), x0.size), np.nan + 0j)
+    for s in frfs:
+        x = np.asarray(s["x"], dtype=float)
+        if x.shape != x0.shape or not np.allclose(x, x0):
+            raise DataFormatError(f"{where}: FRFs have different frequency axes")
+        H[rsp.index((int(s["rsp_node"]), int(s["rsp_dir"]))), ref.index(int(s["ref_node"]))] = s["data"]
+    if np.isnan(H).any():
+        raise DataFormatError(f"{where}: not every response has an FRF for every reference")
+    keys = [f"{n}:{d}" for n, d in rsp]
+    ch = {k: (channels or {}).get(k, (k, "unknown", np.nan)) for k in keys}
+    ang = np.array([(points or {}).get(str(n), np.nan) for n in ref], dtype=float)
+    return FRFResult(freq_hz=x0, H=H, coherence=np.full(H.shape, np.nan), n_averages=np.zeros(len(ref), int),
+                     point_index=np.arange(len(ref)), point_angle=ang,
+                     channel_name=tuple(ch[k][0] for k in keys), channel_location=tuple(ch[k][1] for k in keys),
+                     channel_angle=np.array([ch[k][2] for k in keys], dtype=float), rejections=(),
+                     dead_channels=(), estimator="unknown", form=form, exp_tau_s=None, sample_rate=np.nan,
+                     n_samples=0, meta={"source": where, "reference_nodes": ref})

@@ -140,7 +140,7 @@ def estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="a
                                       and is_circumferential(point_angle, channel_location))
     if spatial:
         groups = decompose(Hb, point_angle)
-        group_max = min(opt.max_order, 40)  # an order holds a few modes: 40 is plenty
+        group_max = min(opt.max_order, 24)  # an order holds a few modes: 24 is plenty
     else:
         groups = {-1: (Hb.reshape(-1, lines.sum()), np.eye(n_live * n_p))}
         group_max = opt.max_order
@@ -148,13 +148,14 @@ def estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="a
         raise ParameterError(f"model order {group_max} is too high for {lines.sum()} lines in the band "
                              f"(allowed up to {lines.sum() // 2 - 1})")
     diagrams, found, rejected = [], [], []
+    Hflat = Hb.reshape(-1, lines.sum())
     synth = np.zeros((n_live * n_p, lines.sum()), dtype=complex)
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
         b = principal_responses(k_lines, rows, None, rtol=opt.rtol_svd)
         d = stabilize(b, sweep(b, range(2, group_max + 1)), opt.stabilization)
         diagrams.append((g, d))
         s = np.array([c.representative.s for c in d.selected()], dtype=complex)
-        fit, s, rej = _fit_group(k_lines, rows, s, form, opt, g)
+        fit, s, rej = _fit_group(k_lines, rows, back, Hflat, s, form, opt, g)
         rejected += rej
         if fit is not None:
             synth += back @ fit.synthesis
@@ -169,7 +170,6 @@ def estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="a
     s = np.array([m[0] for m in modes])
     shapes = np.full((s.size, H.shape[0], n_p), np.nan + 0j)
     shapes[:, live] = np.array([m[2] for m in modes]).reshape(s.size, n_live, n_p)
-    Hflat = Hb.reshape(-1, lines.sum())
     err = np.full((H.shape[0], n_p), np.nan)
     err[live] = (np.linalg.norm(Hflat - synth, axis=1) /
                  np.maximum(np.linalg.norm(Hflat, axis=1), np.finfo(float).tiny)).reshape(n_live, n_p)
@@ -193,14 +193,20 @@ class _GroupFit:
     significance: np.ndarray
 
 
-def _fit_group(freq, rows, s, form, opt, g):
-    """LSFD of one group's rows; drop insignificant poles and refit until settled."""
+def _fit_group(freq, rows, back, H_phys, s, form, opt, g):
+    """LSFD of one group's rows; drop insignificant poles and refit until settled.
+
+    Significance is judged on the physical FRFs (the mode's share of the measured response
+    around its own frequency), so a pole fitted to the noise of a group that carries
+    almost nothing is dropped however large its share of that group.
+    """
     rejected = []
-    for _ in range(20):
+    for _ in range(40):
         if s.size == 0:
             return None, s, rejected
         fit = lsfd(freq, rows, s, form=form)
-        sig = significance(freq, rows, fit.residues, s, form=form)
+        sig = np.array([significance(freq, H_phys, back @ fit.residues[:, [k]], s[[k]], form=form)[0]
+                        for k in range(s.size)])
         weak = np.flatnonzero(sig < opt.min_significance)
         if weak.size == 0:
             return _GroupFit(fit.residues, fit.synthesis, sig), s, rejected
@@ -242,3 +248,28 @@ def _merge(found, opt):
                     {int(found[j][1]): float(energy[j] / tot) for j in groups_seen.values()}))
     out.sort(key=lambda m: abs(m[0]))
     return out
+
+
+def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None):
+    """The whole modal stage on an FRFResult: modes, and the tyre classification when the
+    points go round a tread.
+
+    Returns
+    -------
+    table : ModalTable ; result : ModalResult
+    """
+    from .classify import classify
+    from .modalfile import table_from_result
+
+    res = estimate_modes(r.freq_hz, r.H, point_angle=r.point_angle, channel_location=r.channel_location,
+                         form=r.form, exp_tau_s=r.exp_tau_s, opt=opt, progress=progress)
+    classes = None
+    if res.meta["spatial"]:
+        live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels]
+        locs = [r.channel_location[i] for i in live]
+        if "tread" in locs:
+            classes = classify(res.freq_hz, res.shapes[:, live], r.point_angle, locs, res.significance)
+    table = table_from_result(res, classes, point_angle=r.point_angle, point_index=r.point_index,
+                              channel_name=r.channel_name, channel_location=r.channel_location,
+                              channel_angle=r.channel_angle, form=r.form)
+    return table, res

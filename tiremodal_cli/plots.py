@@ -13,7 +13,7 @@ import numpy as np  # noqa: E402
 
 from .files import atomic_path  # noqa: E402
 
-__all__ = ["plot_frf", "save_figure"]
+__all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_shapes", "plot_synthesis"]
 
 
 def save_figure(fig, path, *, overwrite: bool = False) -> None:
@@ -60,3 +60,113 @@ def plot_frf(r, *, points=(0,), channels=None, axes=None):
     for ax in axes:
         ax.grid(True, alpha=0.3)
     return axes
+
+
+_STATUS_STYLE = {0: ("o", "lightgray", "new"), 1: ("x", "tab:orange", "f"), 2: ("d", "tab:purple", "f, ζ"),
+                 3: ("s", "tab:blue", "f, shape"), 4: ("+", "tab:green", "stable")}
+
+
+def plot_stabilization(table, *, H_freq=None, H_mag=None, ax=None):
+    """Stabilization diagram: every candidate pole by order, coloured by status; the
+    adopted modes as vertical lines; optionally a mean FRF magnitude behind (right axis).
+
+    table : ModalTable ; H_freq, H_mag : (n_freq,) arrays, optional
+    """
+    if ax is None:
+        _, ax = plt.subplots(figsize=(10, 6))
+    d = table.diagram
+    groups = np.unique(d[:, 0]) if d.size else []
+    # spread the groups' orders apart so every group's sweep is readable
+    offset = {g: i for i, g in enumerate(groups)}
+    o_max = d[:, 1].max() + 2 if d.size else 1
+    for code, (marker, color, label) in _STATUS_STYLE.items():
+        sel = d[:, 4] == code
+        if sel.any():
+            y = d[sel, 1] + np.array([offset[g] for g in d[sel, 0]]) * o_max
+            ax.plot(d[sel, 2], y, marker, color=color, ms=3, ls="none", label=label)
+    for f in table.frequency_hz:
+        ax.axvline(f, color="k", lw=0.5, alpha=0.5)
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("model order" + (" (stacked by circumferential order group)" if len(groups) > 1 else ""))
+    ax.legend(fontsize=7, loc="upper left")
+    if H_freq is not None:
+        ax2 = ax.twinx()
+        ax2.semilogy(H_freq, H_mag, color="0.4", lw=0.8)
+        ax2.set_ylabel("mean |H|")
+    return ax
+
+
+def plot_mac(M, *, labels_a=None, labels_b=None, ax=None, title="MAC"):
+    """A MAC matrix as a heat map with values."""
+    if ax is None:
+        size = max(5, 0.35 * max(M.shape))
+        _, ax = plt.subplots(figsize=(size, size))
+    im = ax.imshow(M, vmin=0, vmax=1, cmap="viridis", origin="upper")
+    if max(M.shape) <= 40:
+        for (i, j), v in np.ndenumerate(M):
+            ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=5, color="w" if v < 0.6 else "k")
+    if labels_a is not None:
+        ax.set_yticks(range(len(labels_a)), labels_a, fontsize=6)
+    if labels_b is not None:
+        ax.set_xticks(range(len(labels_b)), labels_b, fontsize=6, rotation=90)
+    ax.figure.colorbar(im, ax=ax, shrink=0.7)
+    ax.set_title(title)
+    return ax
+
+
+def plot_shapes(table, *, modes=None, ncols=6):
+    """Mode shapes as polar plots of the tread and sidewall (the paper's Figs. A1/A2).
+
+    The residues seen by the tread (and sidewall) sensor over the point angles, made real
+    along their principal direction, drawn as a deformed circle around the unit circle.
+    Returns the figure.
+    """
+    modes = list(range(table.n_modes)) if modes is None else list(modes)
+    rows = int(np.ceil(len(modes) / ncols)) or 1
+    fig, axes = plt.subplots(rows, ncols, subplot_kw={"projection": "polar"}, figsize=(2.2 * ncols, 2.4 * rows))
+    axes = np.atleast_1d(axes).ravel()
+    locs = list(table.channel_location)
+    order = np.argsort(np.mod(table.point_angle, 2 * np.pi))
+    th = np.mod(table.point_angle, 2 * np.pi)[order]
+    th_c = np.append(th, th[0] + 2 * np.pi)
+    for ax, r in zip(axes, modes):
+        ax.plot(np.linspace(0, 2 * np.pi, 100), np.ones(100), color="0.8", lw=0.6)
+        for loc, color in (("tread", "tab:blue"), ("sidewall", "tab:red")):
+            if loc not in locs:
+                continue
+            v = table.shapes[r, locs.index(loc)]
+            if not np.all(np.isfinite(v)):
+                continue
+            phi = 0.5 * np.angle(np.sum(table.shapes[r, locs.index("tread")] ** 2))
+            x = np.real(v * np.exp(-1j * phi))[order]
+            scale = np.max(np.abs(table.shapes[r][np.isfinite(table.shapes[r])])) or 1
+            rad = 1 + 0.35 * x / scale
+            ax.plot(th_c, np.append(rad, rad[0]), color=color, lw=1, label=loc)
+        lab = f"{table.frequency_hz[r]:.1f} Hz"
+        if table.n[r] >= 0:
+            lab += f"\nn={table.n[r]} {table.branch[r]}"
+        ax.set_title(lab, fontsize=7)
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.set_ylim(0, 1.5)
+    for ax in axes[len(modes):]:
+        ax.set_visible(False)
+    if modes:
+        axes[0].legend(fontsize=6, loc="lower left", bbox_to_anchor=(-0.3, -0.3))
+    fig.tight_layout()
+    return fig
+
+
+def plot_synthesis(freq_hz, H, H_syn, *, labels=(), ax=None):
+    """Measured against synthesised FRF magnitudes. H, H_syn : (k, n_freq) arrays."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(9, 5))
+    for i in range(H.shape[0]):
+        line, = ax.semilogy(freq_hz, np.abs(H[i]), lw=1, label=(labels[i] if i < len(labels) else None))
+        ax.semilogy(freq_hz, np.abs(H_syn[i]), "--", color=line.get_color(), lw=1)
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("|H| (solid: measured, dashed: modal model)")
+    ax.grid(True, alpha=0.3)
+    if labels:
+        ax.legend(fontsize=7)
+    return ax

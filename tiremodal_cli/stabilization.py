@@ -97,8 +97,8 @@ class Diagram:
         return sorted((c for c in self.clusters if c.adopted), key=lambda c: c.representative.freq_hz)
 
 
-def _shapes(band: Band, s, max_lines: int = 512):
-    """Residues of the candidate poles in the principal responses (LSFD on ≤ 512 lines).
+def _shapes(band: Band, s, max_lines: int = 256):
+    """Residues of the candidate poles in the principal responses (LSFD on ≤ 256 lines).
 
     Only the in-band candidates enter, with residual terms for the rest; frequency-domain
     fitting keeps close poles apart better than the impulse responses' Vandermonde system.

@@ -6,14 +6,14 @@ from pathlib import Path
 
 import click
 
-from .. import frffile, measurement
+from .. import frffile, measurement, modalfile
 from ..errors import DataFormatError
 from .main import cli
 from .options import echo_json, json_option
 
 DESCRIBERS = {measurement.FORMAT_NAME: lambda p: measurement.describe(
     measurement.read_measurement(p)),
-              frffile.FORMAT_NAME: frffile.describe_frf}
+              frffile.FORMAT_NAME: frffile.describe_frf, modalfile.FORMAT_NAME: modalfile.describe_modal}
 
 
 def _human(d: dict) -> str:

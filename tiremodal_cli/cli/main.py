@@ -15,7 +15,7 @@ from .. import __version__
 from ..errors import TiremodalError
 
 _NO_ARGS = getattr(click.exceptions, "NoArgsIsHelpError", None)  # click ≥ 8.2
-COMMANDS = ("simulate", "ingest", "info", "frf")
+COMMANDS = ("simulate", "ingest", "info", "frf", "lsce", "mac")
 
 
 class TiremodalGroup(click.Group):
@@ -68,7 +68,7 @@ def cli(verbose, quiet):
 
 
 def _register():
-    from . import frf, info, ingest, simulate  # noqa: F401  (each adds its command)
+    from . import frf, info, ingest, lsce, simulate  # noqa: F401  (each adds its command)
 
 
 _register()

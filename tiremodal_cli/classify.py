@@ -1,0 +1,143 @@
+"""Tyre classification of modes: circumferential order n, branch, aliases, split pairs.
+
+* **n** from the spatial pattern of the tread shape over the impact angles: the shape (the
+  residues seen by a tread sensor) is made real along its principal direction and fitted
+  with the harmonics of :func:`tiremodal_cli.spatial.harmonic_design`; the order holding
+  the most energy wins, and its share of the energy is the confidence.
+* **branch** from the relative phase of the sidewall and tread sensors' residues: in phase
+  ("same", ω₁ of the model) or opposite ("opposite", ω₂).
+* **aliases**: a grid of N points cannot tell n from N − n, N + n, …. Within a branch the
+  model's frequencies rise with n, so once a branch has reached the grid's top order
+  ⌊N/2⌋, a mode whose spatial order falls below one already passed at a lower frequency
+  takes the smallest alias that keeps the order rising.
+* **confidences**: ``n_confidence`` is the winning order's energy share; the branch's is
+  |Re ρ| / (‖t‖‖s‖) with ρ = tᴴs the tread–sidewall product (1: perfectly in or out of
+  phase). A mode whose tread barely moves (high-n same-direction modes) gets a low one.
+* **split pairs**: two modes with one (n, branch) within 5 % in frequency are the cos/sin
+  members of a pair split by a broken symmetry; both are reported, with the splitting.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .spatial import harmonic_design, max_order
+
+__all__ = ["Classification", "classify"]
+
+
+@dataclass(frozen=True)
+class Classification:
+    n: int
+    n_spatial: int
+    n_confidence: float
+    aliased: bool
+    branch: str | None
+    branch_confidence: float = 0.0
+    pair: int | None = None
+    splitting_hz: float | None = None
+
+    def to_dict(self):
+        return {"n": self.n, "n_spatial": self.n_spatial, "n_confidence": self.n_confidence,
+                "n_aliased": self.aliased, "branch": self.branch, "branch_confidence": self.branch_confidence,
+                "pair": self.pair, "splitting_hz": self.splitting_hz}
+
+
+def _real(v):
+    """A complex shape turned real along its principal direction."""
+    phi = 0.5 * np.angle(np.sum(v**2))
+    return np.real(v * np.exp(-1j * phi))
+
+
+def order_energy(shape_over_points, angles_rad) -> dict[int, float]:
+    """Share of a real shape's energy in each circumferential order (least squares)."""
+    x = np.asarray(shape_over_points, dtype=float)
+    n_p = x.size
+    n_max = max_order(n_p)
+    D, names = harmonic_design(angles_rad, n_max)
+    while D.shape[1] > n_p:
+        n_max -= 1
+        D, names = harmonic_design(angles_rad, n_max)
+    coef = np.linalg.lstsq(D, x, rcond=None)[0]
+    energy: dict[int, float] = {}
+    for c, (n, _) in zip(coef, names):
+        col = D[:, names.index((n, _))]
+        energy[n] = energy.get(n, 0.0) + float(c**2 * col @ col)
+    tot = sum(energy.values())
+    return {n: e / tot for n, e in energy.items()} if tot > 0 else energy
+
+
+def classify(freq_hz, shapes, point_angle, channel_location, significance=None) -> list[Classification]:
+    """Classify every mode.
+
+    Parameters
+    ----------
+    freq_hz : (n_modes,) array
+    shapes : (n_modes, n_channels, n_points) complex array     residues
+    point_angle : (n_points,) array, rad
+    channel_location : sequence of str
+    significance : (n_modes,) array, optional — only modes ≥ 0.3 move the alias mark
+
+    Returns
+    -------
+    list of Classification, in the order of ``freq_hz``
+    """
+    locs = list(channel_location)
+    it = locs.index("tread")
+    isw = locs.index("sidewall") if "sidewall" in locs else None
+    n_p = len(point_angle)
+    out = []
+    for r in range(len(freq_hz)):
+        tread = shapes[r, it]
+        e = order_energy(_real(tread), point_angle)
+        n_s = max(e, key=e.get)
+        branch, b_conf = None, 0.0
+        if isw is not None and np.all(np.isfinite(shapes[r, isw])):
+            side = shapes[r, isw]
+            rho = np.vdot(tread, side)
+            branch = "same" if rho.real >= 0 else "opposite"
+            den = np.linalg.norm(tread) * np.linalg.norm(side)
+            b_conf = float(abs(rho.real) / den) if den > 0 else 0.0
+        out.append([n_s, float(e[n_s]), branch, b_conf])
+    # alias resolution: within a branch, n rises with frequency; aliasing can only start
+    # once the branch has reached the grid's highest order (⌊N/2⌋), and only clear modes
+    # (both confidences ≥ 0.5) move the mark
+    ns = [o[0] for o in out]
+    n_top = max_order(n_p)
+    for br in {o[2] for o in out}:
+        idx = sorted((r for r in range(len(out)) if out[r][2] == br), key=lambda r: freq_hz[r])
+        top = -1
+        for r in idx:
+            n = out[r][0]
+            if n < top and top >= n_top - 1:
+                k = 1
+                cands = []
+                while not cands or min(cands) < top:
+                    cands = [c for c in (k * n_p - out[r][0], k * n_p + out[r][0]) if c >= top]
+                    k += 1
+                    if k > 10:
+                        break
+                n = min(cands) if cands else n
+            ns[r] = n
+            clear = out[r][1] >= 0.5 and out[r][3] >= 0.5 and (significance is None or significance[r] >= 0.3)
+            if clear:
+                top = max(top, n)
+    # split pairs
+    res = []
+    pair_id = {}
+    for r in range(len(out)):
+        key = (ns[r], out[r][2])
+        pair_id.setdefault(key, []).append(r)
+    for r in range(len(out)):
+        members = pair_id[(ns[r], out[r][2])]
+        pid = split = None
+        if len(members) == 2 and abs(freq_hz[members[0]] - freq_hz[members[1]]) < 0.05 * freq_hz[r]:
+            pid = min(members)
+            split = float(abs(freq_hz[members[0]] - freq_hz[members[1]]))
+        res.append(Classification(n=int(ns[r]), n_spatial=int(out[r][0]), n_confidence=out[r][1],
+                                  aliased=bool(ns[r] != out[r][0]), branch=out[r][2],
+                                  branch_confidence=out[r][3], pair=pid,
+                                  splitting_hz=split))
+    return res

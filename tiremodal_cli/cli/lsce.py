@@ -1,0 +1,116 @@
+"""``tiremodal lsce``: modal parameters from FRFs (LSCE, stabilization, LSFD, tyre classes)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+import numpy as np
+
+from ..files import check_overwrite, sha256_file, write_text_atomic
+from ..frffile import read_frf, read_frf_uff
+from ..ingest import load_channel_map
+from ..modalfile import to_csv, to_rows, write_modal
+from ..modes import ModalOptions, modal_table_from_frf
+from ..stabilization import StabilizationOptions
+from .main import cli
+from .options import Progress, echo_json, json_option, overwrite_option
+
+
+def read_any_frf(path: Path, mapping=None):
+    """An FRF file (HDF5 from ``tiremodal frf``) or UFF 58 FRFs (function type 4)."""
+    if path.suffix.lower() in (".uff", ".unv"):
+        chans, points = load_channel_map(mapping) if mapping else ({}, {})
+        return read_frf_uff(path, channels=chans, points=points)
+    return read_frf(path)
+
+
+@cli.command("lsce")
+@click.argument("frf_file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="Modal file to write (HDF5).")
+@click.option("--band", nargs=2, type=float, metavar="LO HI", help="Analysis band, Hz (default: all lines > 0 Hz).")
+@click.option("--max-order", type=click.IntRange(2, 400), default=120, show_default=True,
+              help="Highest model order of the sweep (per circumferential order: at most 24).")
+@click.option("--spatial", type=click.Choice(["auto", "on", "off"]), default="auto", show_default=True,
+              help="Split tyre FRFs into circumferential orders before the sweep.")
+@click.option("--tol-freq", type=float, default=0.01, show_default=True, help="Stability: relative frequency.")
+@click.option("--tol-damping", type=float, default=0.05, show_default=True, help="Stability: relative damping.")
+@click.option("--tol-mac", type=float, default=0.98, show_default=True, help="Stability: shape MAC.")
+@click.option("--min-significance", type=float, default=0.05, show_default=True,
+              help="Reject modes explaining less of the response at their frequency.")
+@click.option("--mapping", type=click.Path(exists=True, dir_okay=False),
+              help="For UFF input: channel names/locations/angles and point angles (as for ingest).")
+@click.option("--csv", "csv_out", type=click.Path(dir_okay=False, path_type=Path), help="Also write the table as CSV.")
+@click.option("--plot-stabilization", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--plot-mac", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--plot-shapes", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--plot-synthesis", type=click.Path(dir_okay=False, path_type=Path))
+@overwrite_option
+@json_option
+def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, tol_mac, min_significance, mapping,
+             csv_out, plot_stabilization, plot_mac, plot_shapes, plot_synthesis, overwrite, as_json):
+    """Estimate modes of FRF_FILE (FRF HDF5 or UFF 58 FRFs) into OUTPUT.
+
+    Prints the modal table (text; --json: an object with the modes, the clusters of the
+    stabilization and the rejected candidates).
+    """
+    outs = [output, csv_out, plot_stabilization, plot_mac, plot_shapes, plot_synthesis]
+    for o in outs:
+        if o is not None:
+            check_overwrite(o, overwrite)
+    r = read_any_frf(frf_file, mapping)
+    opt = ModalOptions(band_hz=tuple(band) if band else None, max_order=max_order, spatial=spatial,
+                       min_significance=min_significance,
+                       stabilization=StabilizationOptions(tol_freq=tol_freq, tol_damping=tol_damping, tol_mac=tol_mac))
+    bar = Progress("lsce")
+    try:
+        table, res = modal_table_from_frf(r, opt, progress=bar)
+    finally:
+        bar.close()
+    write_modal(output, table, input_file=str(frf_file), input_sha256=sha256_file(frf_file), overwrite=overwrite)
+    if csv_out:
+        write_text_atomic(csv_out, to_csv(table), overwrite=overwrite)
+    _plots(table, res, r, plot_stabilization, plot_mac, plot_shapes, plot_synthesis, overwrite)
+    rows = to_rows(table)
+    if as_json:
+        echo_json({"modes": rows, "clusters": table.clusters, "rejected_modes": table.rejected,
+                   "band_hz": table.meta["band_hz"], "spatial": table.meta["spatial"],
+                   "exp_tau_s": table.meta["exp_tau_s"],
+                   "fit_error_median": float(np.nanmedian(table.fit_error)), "output": str(output)})
+    else:
+        head = f"{'mode':>4} {'f [Hz]':>9} {'zeta [%]':>8} {'MPC':>5} {'n':>3} {'branch':>8} {'conf':>5}"
+        click.echo(head)
+        for row in rows:
+            click.echo(f"{row['mode']:4d} {row['frequency_hz']:9.3f} {100 * row['damping_ratio']:8.3f} "
+                       f"{row['mpc']:5.2f} {row.get('n', ''):>3} {row.get('branch') or '':>8} "
+                       f"{row.get('n_confidence', float('nan')):5.2f}")
+
+
+def _plots(table, res, r, stab, macp, shapes, synth, overwrite):
+    if not any((stab, macp, shapes, synth)):
+        return
+    from ..mac import mac_matrix
+    from ..plots import plot_mac, plot_shapes, plot_stabilization, plot_synthesis, save_figure
+
+    lines = (r.freq_hz >= res.band_freq_hz[0] - 1e-9) & (r.freq_hz <= res.band_freq_hz[-1] + 1e-9)
+    if stab:
+        mag = np.nanmean(np.abs(r.H[..., lines]).reshape(-1, lines.sum()), axis=0)
+        ax = plot_stabilization(table, H_freq=r.freq_hz[lines], H_mag=mag)
+        save_figure(ax.figure, stab, overwrite=overwrite)
+    if macp:
+        flat = np.nan_to_num(table.shapes.reshape(table.n_modes, -1))
+        labels = [f"{f:.1f}" + (f" n{n}{b[:1]}" if n >= 0 else "") for f, n, b in
+                  zip(table.frequency_hz, table.n, table.branch)]
+        ax = plot_mac(mac_matrix(flat), labels_a=labels, labels_b=labels, title="AutoMAC")
+        save_figure(ax.figure, macp, overwrite=overwrite)
+    if shapes:
+        save_figure(plot_shapes(table), shapes, overwrite=overwrite)
+    if synth:
+        k = [0, min(1, r.H.shape[1] - 1)]
+        live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels]
+        H = np.array([r.H[c, p][lines] for c in live[:2] for p in k])
+        S = np.array([res.synthesis[c, p] for c in live[:2] for p in k])
+        labels = [f"{r.channel_name[c]} / point {p + 1}" for c in live[:2] for p in k]
+        ax = plot_synthesis(res.band_freq_hz, H, S, labels=labels)
+        save_figure(ax.figure, synth, overwrite=overwrite)

@@ -1,0 +1,183 @@
+"""The modal file (``tiremodal.modal``, version 1) and its table forms (JSON, CSV).
+
+HDF5: root attributes ``format``, ``format_version``, ``tiremodal_version``, ``input_file``,
+``input_sha256``, ``form``, ``meta`` (JSON: band, options, exponential window),
+``clusters`` (JSON: every cluster of every group with its decision), ``rejected`` (JSON);
+datasets per mode ``frequency_hz``, ``damping_ratio``, ``pole`` (complex, as estimated,
+rad/s), ``mpc``, ``significance``, ``group``, ``n`` (−1: none), ``n_spatial``,
+``n_confidence``, ``branch`` (str, "" none), ``branch_confidence``, ``pair`` (−1: none),
+``splitting_hz`` (NaN: none), ``shapes`` (n_modes, n_channels, n_points) complex residues;
+geometry ``point_angle``, ``point_index``, ``channel_name``, ``channel_location``,
+``channel_angle``; ``fit_error`` (n_channels, n_points); the stabilization diagram
+``diagram`` (n_poles, 5): group, order, frequency_hz, damping_ratio, status code
+(0 new, 1 f, 2 fd, 3 fv, 4 stable).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from dataclasses import dataclass
+
+import h5py
+import numpy as np
+
+from . import __version__
+from .errors import DataFormatError
+from .files import atomic_path
+from .measurement import _attr_str, _strings, open_hdf5
+
+__all__ = ["FORMAT_NAME", "ModalTable", "table_from_result", "write_modal", "read_modal", "to_rows",
+           "to_csv", "read_modal_csv", "describe_modal", "STATUS_CODES"]
+
+FORMAT_NAME = "tiremodal.modal"
+FORMAT_VERSION = 1
+STATUS_CODES = {"new": 0, "f": 1, "fd": 2, "fv": 3, "stable": 4}
+COLUMNS = ("mode", "frequency_hz", "damping_ratio", "n", "branch", "n_confidence", "branch_confidence",
+           "mpc", "significance", "n_spatial", "n_aliased", "pair", "splitting_hz", "group")
+
+
+@dataclass(frozen=True)
+class ModalTable:
+    """A modal table with shapes and geometry (what the modal file holds)."""
+
+    frequency_hz: np.ndarray
+    damping_ratio: np.ndarray
+    pole: np.ndarray
+    mpc: np.ndarray
+    significance: np.ndarray
+    group: np.ndarray
+    n: np.ndarray
+    n_spatial: np.ndarray
+    n_confidence: np.ndarray
+    branch: tuple
+    branch_confidence: np.ndarray
+    pair: np.ndarray
+    splitting_hz: np.ndarray
+    shapes: np.ndarray
+    point_angle: np.ndarray
+    point_index: np.ndarray
+    channel_name: tuple
+    channel_location: tuple
+    channel_angle: np.ndarray
+    fit_error: np.ndarray
+    diagram: np.ndarray
+    form: str = "accelerance"
+    meta: dict | None = None
+    clusters: list | None = None
+    rejected: list | None = None
+
+    @property
+    def n_modes(self) -> int:
+        return self.frequency_hz.size
+
+
+def table_from_result(res, classes, *, point_angle, point_index, channel_name, channel_location,
+                      channel_angle, form) -> ModalTable:
+    """A ModalTable from a ModalResult and its classifications (None: not a tyre)."""
+    k = res.freq_hz.size
+    cls = classes or [None] * k
+    diag, clusters = [], []
+    for g, d in res.diagrams:
+        diag += [(g, p.order, p.freq_hz, p.damping_ratio, STATUS_CODES[p.status]) for p in d.poles]
+        clusters += [{"group": int(g), **c.to_dict()} for c in d.clusters]
+    return ModalTable(
+        frequency_hz=res.freq_hz, damping_ratio=res.damping_ratio, pole=res.poles, mpc=res.mpc,
+        significance=res.significance, group=res.group,
+        n=np.array([c.n if c else -1 for c in cls]), n_spatial=np.array([c.n_spatial if c else -1 for c in cls]),
+        n_confidence=np.array([c.n_confidence if c else np.nan for c in cls]),
+        branch=tuple((c.branch or "") if c else "" for c in cls),
+        branch_confidence=np.array([c.branch_confidence if c else np.nan for c in cls]),
+        pair=np.array([c.pair if c and c.pair is not None else -1 for c in cls]),
+        splitting_hz=np.array([c.splitting_hz if c and c.splitting_hz is not None else np.nan for c in cls]),
+        shapes=res.shapes, point_angle=np.asarray(point_angle, float), point_index=np.asarray(point_index),
+        channel_name=tuple(channel_name), channel_location=tuple(channel_location),
+        channel_angle=np.asarray(channel_angle, float), fit_error=res.fit_error,
+        diagram=np.array(diag, dtype=float).reshape(-1, 5), form=form, meta=res.meta, clusters=clusters,
+        rejected=res.rejected)
+
+
+def to_rows(t: ModalTable) -> list[dict]:
+    """One dict per mode (the ``--json`` list; n, branch, pair absent when not a tyre)."""
+    rows = []
+    for i in range(t.n_modes):
+        row = {"mode": i + 1, "frequency_hz": float(t.frequency_hz[i]), "damping_ratio": float(t.damping_ratio[i]),
+               "mpc": float(t.mpc[i]), "significance": float(t.significance[i]), "group": int(t.group[i])}
+        if t.n[i] >= 0:
+            row.update(n=int(t.n[i]), branch=t.branch[i] or None, n_confidence=float(t.n_confidence[i]),
+                       branch_confidence=float(t.branch_confidence[i]), n_spatial=int(t.n_spatial[i]),
+                       n_aliased=bool(t.n[i] != t.n_spatial[i]),
+                       pair=None if t.pair[i] < 0 else int(t.pair[i]) + 1,
+                       splitting_hz=None if not np.isfinite(t.splitting_hz[i]) else float(t.splitting_hz[i]))
+        rows.append(row)
+    return rows
+
+
+def to_csv(t: ModalTable) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=COLUMNS, extrasaction="ignore", lineterminator="\n")
+    w.writeheader()
+    for r in to_rows(t):
+        w.writerow({k: ("" if r.get(k) is None else r.get(k, "")) for k in COLUMNS})
+    return buf.getvalue()
+
+
+def write_modal(path, t: ModalTable, *, input_file: str = "", input_sha256: str = "", overwrite=False):
+    s = h5py.string_dtype("utf-8")
+    with atomic_path(path, overwrite=overwrite) as tmp:
+        with h5py.File(tmp, "w") as h:
+            a = h.attrs
+            a["format"], a["format_version"], a["tiremodal_version"] = FORMAT_NAME, FORMAT_VERSION, __version__
+            a["input_file"], a["input_sha256"], a["form"] = str(input_file), input_sha256, t.form
+            a["meta"] = json.dumps(t.meta or {}, default=float)
+            a["clusters"] = json.dumps(t.clusters or [], default=float)
+            a["rejected"] = json.dumps(t.rejected or [], default=float)
+            for name in ("frequency_hz", "damping_ratio", "pole", "mpc", "significance", "group", "n", "n_spatial",
+                         "n_confidence", "branch_confidence", "pair", "splitting_hz", "shapes", "point_angle",
+                         "point_index", "channel_angle", "fit_error", "diagram"):
+                h.create_dataset(name, data=np.asarray(getattr(t, name)))
+            for name in ("branch", "channel_name", "channel_location"):
+                h.create_dataset(name, data=list(getattr(t, name)), dtype=s)
+
+
+def read_modal(path) -> ModalTable:
+    where = str(path)
+    with open_hdf5(path) as h:
+        fmt = _attr_str(h.attrs, "format")
+        if fmt != FORMAT_NAME:
+            raise DataFormatError(f"{where}: format={fmt!r} is not a modal file; expected {FORMAT_NAME!r}")
+        try:
+            d = {k: h[k][()] for k in ("frequency_hz", "damping_ratio", "pole", "mpc", "significance", "group", "n",
+                                       "n_spatial", "n_confidence", "branch_confidence", "pair", "splitting_hz",
+                                       "shapes", "point_angle", "point_index", "channel_angle", "fit_error",
+                                       "diagram")}
+            strs = {k: _strings(h[k]) for k in ("branch", "channel_name", "channel_location")}
+            a = dict(h.attrs)
+        except KeyError as exc:
+            raise DataFormatError(f"{where}: dataset {exc} is missing") from None
+        except (OSError, ValueError) as exc:
+            raise DataFormatError(f"{where}: cannot read ({exc}); the file may be truncated") from None
+
+    def js(k):
+        v = a.get(k, "null")
+        return json.loads(v.decode() if isinstance(v, bytes) else v)
+    return ModalTable(**d, **strs, form=str(a.get("form", "accelerance")), meta=js("meta"), clusters=js("clusters"),
+                      rejected=js("rejected"))
+
+
+def read_modal_csv(path) -> list[dict]:
+    """Rows of a modal CSV (``lsce --csv``, or the paper's Table A1 layout): dicts of strings."""
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            return list(csv.DictReader(fh))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise DataFormatError(f"{path}: cannot read as CSV ({exc})") from None
+
+
+def describe_modal(path) -> dict:
+    t = read_modal(path)
+    return {"format": FORMAT_NAME, "format_version": FORMAT_VERSION, "n_modes": t.n_modes,
+            "band_hz": (t.meta or {}).get("band_hz"), "n_channels": len(t.channel_name),
+            "n_points": int(t.point_angle.size), "tyre_classified": bool(np.any(t.n >= 0)),
+            "modes": to_rows(t)}
