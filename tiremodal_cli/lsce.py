@@ -93,7 +93,9 @@ def principal_responses(freq_hz, H, band_hz=None, *, rtol: float = 1e-4, max_com
     freq_hz : (n_freq,) array, Hz
     H : (n_frf, n_freq) complex array       any form (receptance, mobility, accelerance)
     band_hz : (lo, hi), optional
-    rtol : float                            keep singular values ≥ rtol × the largest
+    rtol : float                            keep singular values ≥ rtol × the largest, and
+                                            (with ≥ 8 of them) above 3 × the median of
+                                            the lower half: the noise plateau
     max_components : int, optional
 
     Returns
@@ -115,6 +117,10 @@ def principal_responses(freq_hz, H, band_hz=None, *, rtol: float = 1e-4, max_com
     if s[0] == 0:
         raise DataFormatError("every FRF is zero in the band")
     r = int(np.sum(s >= rtol * s[0]))
+    if s.size >= 8:
+        # keep the signal subspace: above 3 × the noise plateau (median of the lower half)
+        floor = 3.0 * np.median(s[s.size // 2:])
+        r = max(1, min(r, int(np.sum(s > floor))))
     if max_components is not None:
         r = min(r, max_components)
     P = s[:r, None] * Vh[:r]
@@ -166,8 +172,12 @@ def poles_to_modal(s):
     return wn / (2 * np.pi), zeta
 
 
-def sweep(band: Band, orders, *, skip: int = 0) -> list[OrderPoles]:
+def sweep(band: Band, orders, *, skip: int = 0, max_rows: int | None = None) -> list[OrderPoles]:
     """Poles for every model order of ``orders`` (each ≥ 1).
+
+    ``max_rows`` limits the autoregression to the first samples of the impulse responses
+    (default: 8 × the highest order, at least 1,024): the decaying responses' early part
+    carries the signal, the late part mostly noise, and the cost grows with the rows.
 
     Returns
     -------
@@ -176,7 +186,8 @@ def sweep(band: Band, orders, *, skip: int = 0) -> list[OrderPoles]:
     orders = sorted({int(p) for p in orders})
     if not orders or orders[0] < 1:
         raise ParameterError(f"model orders must be ≥ 1; got {orders[:3]}")
-    R = normal_matrix(band.irf, orders[-1], skip=skip)
+    rows = max(8 * orders[-1], 1024) if max_rows is None else max_rows
+    R = normal_matrix(band.irf, orders[-1], skip=skip, stop=skip + rows)
     out = []
     for p in orders:
         with warnings.catch_warnings():

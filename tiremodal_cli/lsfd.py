@@ -70,7 +70,8 @@ def synthesize(freq_hz, residues, s, *, form="accelerance", lower=None, upper=No
     return H
 
 
-def lsfd(freq_hz, H, s, *, form: str = "accelerance", lower: bool = True, upper: bool = True) -> LSFDResult:
+def lsfd(freq_hz, H, s, *, form: str = "accelerance", lower: bool = True, upper: bool = True,
+         fast: bool = False) -> LSFDResult:
     """Fit residues and residual terms of all FRFs for the poles ``s``.
 
     Parameters
@@ -79,6 +80,9 @@ def lsfd(freq_hz, H, s, *, form: str = "accelerance", lower: bool = True, upper:
     H : (n_frf, K) complex array
     s : (n_modes,) complex array, rad/s, Im > 0
     form : {"receptance", "mobility", "accelerance"}
+    fast : bool
+        Solve the normal equations (Cholesky) and skip the re-synthesis: for the many small
+        fits of a stabilization sweep, where only the shapes' MAC matters.
     """
     q = FORM_POWER[form]
     freq_hz = np.asarray(freq_hz, dtype=float)
@@ -89,11 +93,21 @@ def lsfd(freq_hz, H, s, *, form: str = "accelerance", lower: bool = True, upper:
     scale = np.linalg.norm(Ar, axis=0)
     scale[scale == 0] = 1
     Y = np.concatenate([H.real, H.imag], axis=1).T  # (2K, n_frf)
-    x = scipy.linalg.lstsq(Ar / scale, Y, lapack_driver="gelsd")[0] / scale[:, None]
+    As = Ar / scale
+    x = None
+    if fast:
+        try:
+            x = scipy.linalg.solve(As.T @ As, As.T @ Y, assume_a="pos") / scale[:, None]
+        except (scipy.linalg.LinAlgError, ValueError):
+            x = None
+    if x is None:
+        x = scipy.linalg.lstsq(As, Y, lapack_driver="gelsy")[0] / scale[:, None]
     R = (x[:n_m] + 1j * x[n_m:2 * n_m]).T
     k = 2 * n_m
     LR = x[k] if lower else np.zeros(H.shape[0])
     UR = x[k + int(lower)] if upper else np.zeros(H.shape[0])
+    if fast:
+        return LSFDResult(R, LR, UR, np.empty((0, 0)), np.empty(0))
     Hs = (A @ x).T
     err = np.linalg.norm(H - Hs, axis=1) / np.maximum(np.linalg.norm(H, axis=1), np.finfo(float).tiny)
     return LSFDResult(R, LR, UR, Hs, err)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["mac", "mac_matrix"]
+__all__ = ["mac", "mac_matrix", "subspace_mac"]
 
 
 def mac(a, b) -> float:
@@ -41,3 +41,18 @@ def mac_matrix(A, B=None) -> np.ndarray:
     den = np.outer(np.sum(np.abs(A) ** 2, axis=1), np.sum(np.abs(B) ** 2, axis=1))
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(den > 0, num / np.where(den > 0, den, 1), 0.0)
+
+
+def subspace_mac(A, bases) -> np.ndarray:
+    """MAC of each row of A with a subspace (the largest MAC with any vector in it).
+
+    ``bases`` is a list of (k_j, n_dof) arrays; returns (n_a, len(bases)). For the span of
+    cos nθ and sin nθ this is the share of a shape in order n at its best orientation.
+    """
+    A = np.atleast_2d(np.asarray(A))
+    out = np.zeros((A.shape[0], len(bases)))
+    for j, B in enumerate(bases):
+        Q, _ = np.linalg.qr(np.atleast_2d(B).T.astype(complex))
+        proj = A.conj() @ Q
+        out[:, j] = np.sum(np.abs(proj) ** 2, axis=1) / np.maximum(np.sum(np.abs(A) ** 2, axis=1), np.finfo(float).tiny)
+    return out

@@ -12,6 +12,7 @@ import logging
 from dataclasses import dataclass, field
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from .errors import DataFormatError, ParameterError
 from .lsce import poles_to_modal, principal_responses, sweep
@@ -21,8 +22,10 @@ from .stabilization import Diagram, StabilizationOptions, stabilize
 from .windows import correct_poles
 
 log = logging.getLogger(__name__)
+GROUP_MAX_ORDER = 40  # an order group holds a few modes, plus what models the band edges
+SKIP = 0
 
-__all__ = ["ModalOptions", "ModalResult", "estimate_modes", "is_circumferential"]
+__all__ = ["ModalOptions", "ModalResult", "estimate_modes", "is_circumferential", "modal_table_from_frf"]
 
 
 @dataclass(frozen=True)
@@ -103,7 +106,18 @@ def _band(freq_hz, band_hz):
     return (float(pos[0]), float(pos[-1]))
 
 
-def estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="accelerance",
+def estimate_modes(freq_hz, H, **kwargs) -> "ModalResult":
+    """Modal parameters of a set of FRFs (see :func:`_estimate_modes` for the parameters).
+
+    The sweep is thousands of small solves and eigenproblems; OpenBLAS's threads cost more
+    than they give at that size (measured: 2 × slower on 2 cores), so BLAS runs on one
+    thread here (threadpoolctl), whatever the caller's setting.
+    """
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _estimate_modes(freq_hz, H, **kwargs)
+
+
+def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="accelerance",
                    exp_tau_s=None, opt: ModalOptions = ModalOptions(), progress=None) -> ModalResult:
     """Modal parameters of a set of FRFs.
 
@@ -127,9 +141,15 @@ def estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="a
     H = np.asarray(H)
     if H.ndim != 3 or H.shape[-1] != freq_hz.size:
         raise DataFormatError(f"FRFs must be (n_channels, n_points, n_freq={freq_hz.size}); got {H.shape}")
-    live = np.array([np.all(np.isfinite(H[c])) for c in range(H.shape[0])])
+    # a dead channel is NaN throughout (``tiremodal frf`` marks it so); NaN elsewhere is bad data
+    live = ~np.array([np.all(np.isnan(H[c])) for c in range(H.shape[0])])
     if not live.any():
         raise DataFormatError("no channel has finite FRFs")
+    bad = ~np.isfinite(H[live])
+    if bad.any():
+        c, p, k = np.argwhere(bad)[0]
+        raise DataFormatError(f"FRF of channel {np.flatnonzero(live)[c] + 1}, point {p + 1} has a non-finite "
+                              f"value at {freq_hz[k]:g} Hz")
     band = _band(freq_hz, opt.band_hz)
     sel = principal_responses(freq_hz, H[live].reshape(-1, freq_hz.size), band, rtol=opt.rtol_svd)
     lines = (freq_hz >= sel.freq_hz[0] - 1e-9) & (freq_hz <= sel.freq_hz[-1] + 1e-9)
@@ -140,7 +160,7 @@ def estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="a
                                       and is_circumferential(point_angle, channel_location))
     if spatial:
         groups = decompose(Hb, point_angle)
-        group_max = min(opt.max_order, 24)  # an order holds a few modes: 24 is plenty
+        group_max = min(opt.max_order, GROUP_MAX_ORDER)
     else:
         groups = {-1: (Hb.reshape(-1, lines.sum()), np.eye(n_live * n_p))}
         group_max = opt.max_order
@@ -152,7 +172,7 @@ def estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="a
     synth = np.zeros((n_live * n_p, lines.sum()), dtype=complex)
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
         b = principal_responses(k_lines, rows, None, rtol=opt.rtol_svd)
-        d = stabilize(b, sweep(b, range(2, group_max + 1)), opt.stabilization)
+        d = stabilize(b, sweep(b, range(2, group_max + 1), skip=SKIP), opt.stabilization)
         diagrams.append((g, d))
         s = np.array([c.representative.s for c in d.selected()], dtype=complex)
         fit, s, rej = _fit_group(k_lines, rows, back, Hflat, s, form, opt, g)

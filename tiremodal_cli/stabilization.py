@@ -14,12 +14,13 @@ damping. Every decision is kept (``Cluster.reason``) so the choice can be explai
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.linalg
 
 from .lsce import Band, OrderPoles
-from .lsfd import lsfd
 from .mac import mac
 
 __all__ = ["StabilizationOptions", "StablePole", "Cluster", "Diagram", "stabilize"]
@@ -97,17 +98,28 @@ class Diagram:
         return sorted((c for c in self.clusters if c.adopted), key=lambda c: c.representative.freq_hz)
 
 
-def _shapes(band: Band, s, max_lines: int = 256):
-    """Residues of the candidate poles in the principal responses (LSFD on ≤ 256 lines).
+def _shapes(band: Band, s, max_lines: int = 128):
+    """Residues of the candidate poles in the principal responses, for the MAC test.
 
-    Only the in-band candidates enter, with residual terms for the rest; frequency-domain
-    fitting keeps close poles apart better than the impulse responses' Vandermonde system.
+    A complex least-squares fit on ≤ 128 lines of the band with the basis 1/(iω − s_r) of
+    the candidates and a constant (the rest), solved through its normal equations: cheap,
+    and a fit in frequency keeps close poles apart better than the impulse responses'
+    Vandermonde system. (The final shapes come from the full LSFD, :mod:`.lsfd`.)
     """
     if len(s) == 0:
         return np.zeros((0, band.prf.shape[0]), dtype=complex)
     k = max(1, band.freq_hz.size // max_lines)
-    fit = lsfd(band.freq_hz[::k], band.prf[:, ::k], s, form="receptance", lower=False, upper=True)
-    return fit.residues.T
+    jw = 2j * np.pi * band.freq_hz[::k, None]
+    A = np.concatenate([1.0 / (jw - np.asarray(s)[None, :]), np.ones_like(jw)], axis=1)
+    A /= np.linalg.norm(A, axis=0)
+    G = A.conj().T @ A
+    G[np.diag_indices_from(G)] += 1e-12 * np.trace(G).real / G.shape[0]  # keep it positive definite
+    rhs = A.conj().T @ band.prf[:, ::k].T
+    try:
+        x = scipy.linalg.cho_solve(scipy.linalg.cho_factor(G, check_finite=False), rhs, check_finite=False)
+    except (scipy.linalg.LinAlgError, ValueError):
+        x = scipy.linalg.lstsq(A, band.prf[:, ::k].T, lapack_driver="gelsy")[0]
+    return x[:len(s)]
 
 
 def _candidates(op: OrderPoles, band: Band, zeta_max: float):

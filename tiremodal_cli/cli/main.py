@@ -68,7 +68,7 @@ def cli(verbose, quiet):
 
 
 def _register():
-    from . import frf, info, ingest, lsce, simulate  # noqa: F401  (each adds its command)
+    from . import frf, info, ingest, lsce, mac, simulate  # noqa: F401  (each adds its command)
 
 
 _register()

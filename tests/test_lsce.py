@@ -1,0 +1,184 @@
+"""LSCE, stabilization, LSFD and the tyre classification against known truths."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from tiremodal_cli.frf import FRFOptions, compute_frf
+from tiremodal_cli.frffile import write_frf
+from tiremodal_cli.lsfd import lsfd, mpc, synthesize
+from tiremodal_cli.modalfile import read_modal
+from tiremodal_cli.modes import ModalOptions, estimate_modes, modal_table_from_frf
+from tiremodal_cli.model import TyreParameters
+from tiremodal_cli.simulate import SimulationConfig, simulate
+
+from conftest import run_cli
+
+BEAM = Path(__file__).parent / "data" / "beam"
+BEAM_MODES = [51.52, 142.18, 278.66, 460.40, 687.16, 958.53]
+
+
+def mdof_frf(freq_hz, fn, zeta, shapes, form="receptance"):
+    """FRFs of a proportionally damped system with known modes: (n_out, n_in, n_freq)."""
+    s = -np.asarray(zeta) * 2 * np.pi * np.asarray(fn) + 1j * 2 * np.pi * np.asarray(fn) * np.sqrt(1 - np.asarray(zeta) ** 2)
+    R = np.einsum("ri,rj->ijr", shapes, shapes) / (2j * s.imag)  # residues of mass-normalised real modes
+    return synthesize(freq_hz, R.reshape(-1, len(fn)), s, form=form).reshape(shapes.shape[1], shapes.shape[1], -1)
+
+
+def test_known_poles_of_a_mdof_system_any_structure():
+    rng = np.random.default_rng(3)
+    fn, zeta = np.array([31.0, 47.5, 52.0, 90.0]), np.array([0.01, 0.02, 0.015, 0.03])
+    shapes = rng.standard_normal((4, 6))
+    f = np.arange(0, 150, 0.25)
+    H = mdof_frf(f, fn, zeta, shapes)  # 6 outputs × 6 inputs
+    res = estimate_modes(f, H, form="receptance", opt=ModalOptions(band_hz=(10, 140), max_order=30))
+    assert res.freq_hz.size == 4 and not res.meta["spatial"]
+    assert_allclose(res.freq_hz, fn, rtol=1e-6)
+    assert_allclose(res.damping_ratio, zeta, rtol=1e-4)
+    assert np.all(res.mpc > 0.999)
+    assert np.nanmax(res.fit_error) < 1e-6
+
+
+def test_lsfd_recovers_residues_and_residuals():
+    s = np.array([-2 + 2j * np.pi * 40, -3 + 2j * np.pi * 75])
+    R = np.array([[1 + 0.1j, -0.5j], [0.3, 2.0]])
+    f = np.linspace(20, 100, 400)
+    H = synthesize(f, R, s, form="accelerance", lower=np.array([0.1, -0.2]), upper=np.array([1e-6, 2e-6]))
+    fit = lsfd(f, H, s, form="accelerance")
+    assert_allclose(fit.residues, R, rtol=1e-8)
+    assert_allclose(fit.lower, [0.1, -0.2], rtol=1e-6)
+    assert np.all(fit.error < 1e-10)
+    assert mpc(np.array([1, -2, 3.0])) == pytest.approx(1.0)
+    assert mpc(np.array([1, 1j, -1, -1j])) < 1e-12
+
+
+def test_real_beam_six_modes_from_uff(tmp_path):
+    """Real measured FRFs (pyuff's beam): the six modes of the reference within 0.1 %."""
+    res = run_cli(["lsce", BEAM / "beam_frf.uff", "-o", tmp_path / "beam.h5", "--band", 20, 990, "--json"])
+    assert res.exit_code == 0, res.output
+    modes = json.loads(res.stdout)["modes"]
+    found = np.array([m["frequency_hz"] for m in modes])
+    for f in BEAM_MODES:
+        assert np.min(np.abs(found / f - 1)) < 1e-3, (f, found)
+    assert all("n" not in m and "branch" not in m for m in modes)  # not a tyre: no n, no branch
+
+
+def test_real_beam_from_text_files():
+    H = np.array([np.genfromtxt(BEAM / f"meas_point_{i}.txt", dtype=complex) for i in (1, 2, 3)])[None]
+    res = estimate_modes(np.arange(1001.0), H, opt=ModalOptions(band_hz=(20, 990)))
+    for f in BEAM_MODES:
+        k = np.argmin(np.abs(res.freq_hz - f))
+        assert abs(res.freq_hz[k] / f - 1) < 1e-3
+        assert res.mpc[k] > 0.95
+
+
+@pytest.fixture(scope="module")
+def tyre_tables():
+    """Seed model (34 points, 5 hits), without and with 1 % noise, through frf and lsce."""
+    out = {}
+    for noise in (0.0, 0.01):
+        s = simulate(SimulationConfig(n_points=34, n_hits=5, sample_rate=1024.0, n_samples=4096, noise=noise, seed=1,
+                                      params=TyreParameters(m_w=1000.0)))
+        r = compute_frf(s.measurement)
+        table, _ = modal_table_from_frf(r, ModalOptions(band_hz=(40, 300)))
+        out[noise] = (s.truth, table)
+    return out
+
+
+@pytest.mark.parametrize("noise, f_tol, z_tol", [(0.0, 1e-4, 0.01), (0.01, 3e-3, 0.15)])
+def test_tyre_modes_found_once_with_n_and_branch(tyre_tables, noise, f_tol, z_tol):
+    """Every n ≤ 8 same and n ≤ 10 opposite mode in 40–300 Hz: once, right n and branch,
+    frequency within 0.01 % / 0.3 %, damping within 1 % / 15 % (noise-free / 1 % noise)."""
+    truth, t = tyre_tables[noise]
+    want = [m for m in truth["modes"] if m["harmonic"] == "cos" and 40 <= m["frequency_hz"] <= 300
+            and ((m["branch"] == "same" and m["n"] <= 8) or (m["branch"] == "opposite" and m["n"] <= 10))]
+    assert len(want) == 9 + 11  # same n = 0…8, opposite n = 0…10
+    for m in want:
+        hits = np.flatnonzero((t.n == m["n"]) & (np.array(t.branch) == m["branch"]))
+        assert hits.size == 1, (m["n"], m["branch"], t.frequency_hz[hits])
+        k = hits[0]
+        assert abs(t.frequency_hz[k] / m["frequency_hz"] - 1) <= f_tol, (m, t.frequency_hz[k])
+        assert abs(t.damping_ratio[k] / m["damping_ratio"] - 1) <= z_tol, (m, t.damping_ratio[k])
+        assert t.n_confidence[k] > 0.9
+
+
+def test_exponential_window_corrected_through_lsce():
+    """A window that doubles the apparent damping of the lowest modes; LSCE reports the
+    structure's damping within 2 %."""
+    s = simulate(SimulationConfig(n_points=12, n_hits=2, sample_rate=1024.0, n_samples=4096, damping=0.01, seed=4,
+                                  params=TyreParameters(m_w=1000.0), dtype="float64"))
+    f1 = s.truth["modes"][[m["frequency_hz"] > 60 for m in s.truth["modes"]].index(True)]["frequency_hz"]
+    tau = 1 / (0.01 * 2 * np.pi * f1)  # 1/τ = ζω of a mode near f1: doubles its damping
+    r = compute_frf(s.measurement, FRFOptions(exp_tau_s=tau, force_window=False))
+    table, res = modal_table_from_frf(r, ModalOptions(band_hz=(60, 120)))
+    truth = [m["frequency_hz"] for m in s.truth["modes"] if 62 <= m["frequency_hz"] <= 118 and m["harmonic"] == "cos"
+             and m["branch"] == "same"]
+    assert len(truth) >= 3
+    for f in truth:
+        k = np.argmin(np.abs(table.frequency_hz - f))
+        assert abs(table.frequency_hz[k] / f - 1) < 1e-4
+        raw = -res.poles[k].real / abs(res.poles[k])
+        assert raw > 0.01 + 0.8 / (tau * 2 * np.pi * f)  # the window's damping is in the poles…
+        assert table.damping_ratio[k] == pytest.approx(0.01, rel=0.02)  # …and corrected out
+
+
+def test_cli_outputs(tmp_path, tyre_tables):
+    s = simulate(SimulationConfig(n_points=16, n_hits=3, sample_rate=1024.0, n_samples=2048, noise=0.01, seed=2,
+                                  params=TyreParameters(m_w=1000.0)))
+    r = compute_frf(s.measurement)
+    frf = tmp_path / "t.frf.h5"
+    write_frf(frf, r)
+    out = tmp_path / "t.modal.h5"
+    pngs = {k: tmp_path / f"{k}.png" for k in ("stab", "mac", "shapes", "syn")}
+    res = run_cli(["lsce", frf, "-o", out, "--band", 40, 200, "--json", "--csv", tmp_path / "t.csv",
+                   "--plot-stabilization", pngs["stab"], "--plot-mac", pngs["mac"], "--plot-shapes", pngs["shapes"],
+                   "--plot-synthesis", pngs["syn"]])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    for m in d["modes"]:
+        assert {"frequency_hz", "damping_ratio", "n", "branch", "n_confidence", "mpc"} <= set(m)
+    assert d["clusters"] and all({"frequency_hz", "adopted", "reason", "n_poles"} <= set(c) for c in d["clusters"])
+    assert sum(c["adopted"] for c in d["clusters"]) >= len(d["modes"])
+    header = (tmp_path / "t.csv").read_text().splitlines()[0].split(",")
+    assert {"frequency_hz", "n", "branch", "damping_ratio"} <= set(header)
+    t = read_modal(out)
+    assert t.n_modes == len(d["modes"]) and t.shapes.shape[1:] == (3, 16)
+    assert all(p.read_bytes()[:4] == b"\x89PNG" for p in pngs.values())
+    info = json.loads(run_cli(["info", "--json", out]).stdout)
+    assert info["n_modes"] == t.n_modes
+
+
+@pytest.mark.parametrize("case, msg", [
+    ("layout", "is not an FRF file"),
+    ("band", r"band 10–900 Hz is outside the data"),
+    ("nan", r"point 3 has a non-finite value at"),
+    ("order", r"model order 120 is too high"),
+])
+def test_lsce_bad_input(tmp_path, case, msg):
+    s = simulate(SimulationConfig(n_points=8, n_hits=1, sample_rate=512.0, n_samples=512, seed=1,
+                                  params=TyreParameters(m_w=1000.0)))
+    r = compute_frf(s.measurement)
+    p = tmp_path / "f.h5"
+    args = ["--band", 20, 200]
+    if case == "nan":
+        H = r.H.copy()
+        H[0, 2, 50] = np.nan
+        r = type(r)(**{**r.__dict__, "H": H})
+    if case == "band":
+        args = ["--band", 10, 900]
+    if case == "order":
+        args = ["--band", 20, 80, "--spatial", "off"]
+    write_frf(p, r)
+    if case == "layout":
+        from tiremodal_cli.measurement import write_measurement
+
+        p = tmp_path / "m.h5"
+        write_measurement(p, s.measurement)
+    res = run_cli(["lsce", p, "-o", tmp_path / "o.h5", *args])
+    assert res.exit_code == 2, res.output
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and __import__("re").search(msg, lines[0]), lines
+    assert not (tmp_path / "o.h5").exists()
