@@ -13,7 +13,8 @@ import numpy as np  # noqa: E402
 
 from .files import atomic_path  # noqa: E402
 
-__all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_shapes", "plot_synthesis"]
+__all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_shapes", "plot_synthesis",
+           "plot_dispersion", "plot_convergence", "plot_sensitivity"]
 
 
 def save_figure(fig, path, *, overwrite: bool = False) -> None:
@@ -169,4 +170,61 @@ def plot_synthesis(freq_hz, H, H_syn, *, labels=(), ax=None):
     ax.grid(True, alpha=0.3)
     if labels:
         ax.legend(fontsize=7)
+    return ax
+
+
+def plot_dispersion(rows, *, measured=(), ax=None):
+    """Frequency against circumferential order for both branches (the paper's Fig. 12).
+
+    rows : dicts with n, branch, model_hz (and optionally std_hz);
+    measured : dicts with n, branch, measured_hz.
+    """
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 5))
+    for br, color in (("same", "tab:blue"), ("opposite", "tab:red")):
+        r = sorted((x for x in rows if x["branch"] == br), key=lambda x: x["n"])
+        if r:
+            n = np.array([x["n"] for x in r])
+            f = np.array([x["model_hz"] for x in r])
+            ax.plot(n, f, "-", color=color, label=f"model, {br}")
+            if "std_hz" in r[0]:
+                sd = np.array([x["std_hz"] for x in r])
+                ax.fill_between(n, f - 2 * sd, f + 2 * sd, color=color, alpha=0.2)
+        m = [x for x in measured if x["branch"] == br]
+        if m:
+            ax.plot([x["n"] for x in m], [x["measured_hz"] for x in m], "o", color=color, mfc="none",
+                    label=f"measured, {br}")
+    ax.set_xlabel("circumferential order n")
+    ax.set_ylabel("frequency [Hz]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    return ax
+
+
+def plot_convergence(history, *, ax=None):
+    """Best objective per generation of the evolutionary search (the paper's Fig. 11)."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 4))
+    g = [h[0] for h in history]
+    v = [100 * h[1] for h in history]
+    ax.semilogy(g, v, "-")
+    ax.set_xlabel("generation")
+    ax.set_ylabel("RMS relative frequency error [%]")
+    ax.grid(True, alpha=0.3)
+    return ax
+
+
+def plot_sensitivity(ns, branches, S, names, *, ax=None):
+    """Normalised sensitivities ∂ln f/∂ln p against n, one line per parameter and branch."""
+    if ax is None:
+        _, ax = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    for k, br in enumerate(("same", "opposite")):
+        sel = np.asarray(branches) == br
+        for j, name in enumerate(names):
+            ax[k].plot(np.asarray(ns)[sel], S[sel, j], "o-", ms=3, label=name)
+        ax[k].set_title(f"{br} direction")
+        ax[k].set_xlabel("n")
+        ax[k].grid(True, alpha=0.3)
+    ax[0].set_ylabel("∂ln f / ∂ln p")
+    ax[1].legend(fontsize=8)
     return ax

@@ -15,7 +15,7 @@ from .. import __version__
 from ..errors import TiremodalError
 
 _NO_ARGS = getattr(click.exceptions, "NoArgsIsHelpError", None)  # click ≥ 8.2
-COMMANDS = ("simulate", "ingest", "info", "frf", "lsce", "mac")
+COMMANDS = ("simulate", "ingest", "info", "frf", "lsce", "mac", "predict", "identify", "sensitivity")
 
 
 class TiremodalGroup(click.Group):
@@ -68,7 +68,7 @@ def cli(verbose, quiet):
 
 
 def _register():
-    from . import frf, info, ingest, lsce, mac, simulate  # noqa: F401  (each adds its command)
+    from . import frf, identify, info, ingest, lsce, mac, predict, sensitivity, simulate  # noqa: F401
 
 
 _register()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 
 import click
 import numpy as np
@@ -66,3 +67,43 @@ def parse_key_values(items, what: str) -> dict:
         k, v = it.split("=", 1)
         out[k.strip()] = v.strip()
     return out
+
+
+def params_options(f):
+    """--params FILE and --param NAME=VALUE: the tyre model's parameters."""
+    f = click.option("--param", "param_items", multiple=True, metavar="NAME=VALUE",
+                     help="A model parameter, e.g. k_r1=6.7e6, m_w=clamped (repeatable; default: the paper's).")(f)
+    f = click.option("--params", "params_file", type=click.Path(exists=True, dir_okay=False),
+                     help="TOML/JSON with the model parameters (a [params] table, or flat).")(f)
+    return f
+
+
+def load_params(params_file, param_items):
+    """TyreParameters from a file (its [params] table, or the top level) and NAME=VALUE items."""
+    from ..config import load_mapping
+    from ..model import TyreParameters
+
+    base = {}
+    effects = {}
+    if params_file:
+        data = load_mapping(params_file)
+        base = dict(data.get("params", {k: v for k, v in data.items() if not isinstance(v, dict)}))
+        effects = {k: dict(v) for k, v in data.get("effects", {}).items()}
+    base.update(parse_key_values(param_items, "--param"))
+    return TyreParameters.from_mapping(base), effects
+
+
+def read_table_rows(path: Path):
+    """Modal-table rows from a modal file (``lsce``) or a CSV with frequency_hz, n, branch."""
+    from ..measurement import file_format
+    from ..modalfile import FORMAT_NAME, read_modal, read_modal_csv, to_rows
+
+    path = Path(path)
+    if path.suffix.lower() == ".csv":
+        return read_modal_csv(path)
+    fmt = file_format(path)
+    if fmt != FORMAT_NAME:
+        from ..errors import DataFormatError
+
+        raise DataFormatError(f"{path}: format {fmt!r} is not a modal file or CSV; run 'tiremodal lsce' first")
+    return to_rows(read_modal(path))

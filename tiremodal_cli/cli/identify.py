@@ -1,0 +1,133 @@
+"""``tiremodal identify``: structural parameters of the tyre model from a modal table."""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import click
+import numpy as np
+
+from ..files import check_overwrite, write_text_atomic
+from ..identify import PAPER_GA, FitOptions, fit, modes_from_rows, predict_table
+from .main import cli
+from .options import (Progress, echo_json, json_option, load_params, overwrite_option, params_options,
+                      read_table_rows)
+
+
+def fit_options(free, bounds, weights, seed, paper_ga, population, generations):
+    b = {}
+    for item in bounds:
+        try:
+            name, rng = item.split("=", 1)
+            lo, hi = (float(x) for x in rng.split(":"))
+        except ValueError:
+            raise click.BadParameter(f"{item!r} must be NAME=LO:HI", param_hint="--bounds") from None
+        b[name.strip()] = (lo, hi)
+    kw = dict(free=tuple(x.strip() for x in free.split(",") if x.strip()), bounds=b, weights=weights, seed=seed)
+    if paper_ga:
+        kw.update(population=PAPER_GA["population"], generations=PAPER_GA["generations"],
+                  crossover=PAPER_GA["crossover"], mutation=PAPER_GA["mutation"])
+    if population:
+        kw["population"] = population
+    if generations:
+        kw["generations"] = generations
+    return FitOptions(**kw)
+
+
+def fit_report(res, skipped, predictions) -> dict:
+    names = list(res.free)
+    return {
+        "parameters": {n: {"value": float(v), "std_error": float(s), "relative_std_error_pct": float(100 * s / v)}
+                       for n, v, s in zip(names, res.values, res.std_errors)},
+        "all_parameters": res.parameters.to_dict(), "effects": res.effects,
+        "correlation": {"names": names, "matrix": np.round(res.correlation, 6).tolist()},
+        "undetermined": res.undetermined,
+        "rms_error_pct": res.rms_error_pct, "max_error_pct": res.max_error_pct,
+        "modes": res.modes,
+        "not_followed": [m for m in res.modes if abs(m["error_pct"]) > max(2.0, 2 * res.rms_error_pct)],
+        "skipped_rows": skipped, "predictions": predictions,
+        "history": [{"generation": g, "rms_error_pct": 100 * v} for g, v in res.history],
+        "search": {"method": "differential_evolution + least_squares", "seed": res.options.seed,
+                   "population": res.options.population, "generations": res.options.generations,
+                   "crossover": res.options.crossover, "mutation": res.options.mutation,
+                   "weights": res.options.weights},
+    }
+
+
+def common_fit_options(f):
+    for opt in reversed([
+        click.option("--free", default="k_r1,k_r2,EI", show_default=True,
+                     help="Parameters to fit (of k_r1, k_r2, EI, rhoA, m_s, m_w, b)."),
+        click.option("--bounds", multiple=True, metavar="NAME=LO:HI", help="Search bounds (SI; positive)."),
+        click.option("--weights", type=click.Choice(["relative", "uncertainty"]), default="relative",
+                     show_default=True, help="RMS of relative errors, or weighted by each frequency's uncertainty."),
+        click.option("--seed", type=int, default=0, show_default=True, help="Seed of the evolutionary search."),
+        click.option("--paper-ga", is_flag=True, help="The paper's settings: population 20, 300 generations, "
+                                                      "crossover 0.7, mutation 0.1."),
+        click.option("--population", type=click.IntRange(4), help="Members of the population."),
+        click.option("--generations", type=click.IntRange(1), help="Generations of the search."),
+    ]):
+        f = opt(f)
+    return f
+
+
+@cli.command("identify")
+@click.argument("modes_file", type=click.Path(dir_okay=False, path_type=Path))
+@params_options
+@common_fit_options
+@click.option("--predict-n", type=click.IntRange(1, 100), default=12, show_default=True,
+              help="Predict every (n, branch) up to this order.")
+@click.option("--min-confidence", type=float, default=0.5, show_default=True, help="Leave out modes with lower n_confidence.")
+@click.option("--csv", "csv_out", type=click.Path(dir_okay=False, path_type=Path), help="Per-mode table as CSV.")
+@click.option("--plot-fit", type=click.Path(dir_okay=False, path_type=Path), help="Measured and model against n.")
+@click.option("--plot-convergence", type=click.Path(dir_okay=False, path_type=Path))
+@overwrite_option
+@json_option
+def identify_cmd(modes_file, params_file, param_items, free, bounds, weights, seed, paper_ga, population, generations,
+                 predict_n, min_confidence, csv_out, plot_fit, plot_convergence, overwrite, as_json):
+    """Fit the model to MODES_FILE (a modal file from lsce, or a CSV with frequency_hz, n, branch)."""
+    for o in (csv_out, plot_fit, plot_convergence):
+        if o is not None:
+            check_overwrite(o, overwrite)
+    base, effects = load_params(params_file, param_items)
+    opt = fit_options(free, bounds, weights, seed, paper_ga, population, generations)
+    if effects:
+        from dataclasses import replace
+
+        opt = replace(opt, effects=effects)
+    modes, skipped = modes_from_rows(read_table_rows(modes_file), min_confidence=min_confidence, source=str(modes_file))
+    bar = Progress("identify")
+    try:
+        res = fit(modes, base, opt, progress=bar)
+    finally:
+        bar.close()
+    preds = predict_table(res, predict_n, measured=res.modes)
+    report = fit_report(res, skipped, preds)
+    if csv_out:
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=["n", "branch", "measured_hz", "model_hz", "error_pct"], lineterminator="\n")
+        w.writeheader()
+        w.writerows(res.modes)
+        write_text_atomic(csv_out, buf.getvalue(), overwrite=overwrite)
+    if plot_fit or plot_convergence:
+        from ..plots import plot_convergence as pc, plot_dispersion, save_figure
+
+        if plot_fit:
+            save_figure(plot_dispersion(preds, measured=res.modes).figure, plot_fit, overwrite=overwrite)
+        if plot_convergence:
+            save_figure(pc(res.history).figure, plot_convergence, overwrite=overwrite)
+    if as_json:
+        echo_json(report)
+        return
+    for n, v in report["parameters"].items():
+        click.echo(f"{n:>8} = {v['value']:.6g} ± {v['std_error']:.2g} ({v['relative_std_error_pct']:.1f} %)"
+                   + (f"  [undetermined: {res.undetermined[n]}]" if n in res.undetermined else ""))
+    click.echo(f"RMS error {res.rms_error_pct:.3f} %, max {res.max_error_pct:.3f} %")
+    click.echo(f"{'n':>3} {'branch':>9} {'measured':>10} {'model':>10} {'error %':>8}")
+    for m in res.modes:
+        click.echo(f"{m['n']:3d} {m['branch']:>9} {m['measured_hz']:10.3f} {m['model_hz']:10.3f} {m['error_pct']:8.3f}")
+    if report["not_followed"]:
+        click.echo("the model does not follow: " + ", ".join(f"n={m['n']} {m['branch']} ({m['error_pct']:+.1f} %)"
+                                                             for m in report["not_followed"]))

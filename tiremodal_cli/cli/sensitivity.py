@@ -1,0 +1,58 @@
+"""``tiremodal sensitivity``: the paper's single-variable study and ∂ln f/∂ln p."""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import click
+import numpy as np
+
+from ..files import check_overwrite, write_text_atomic
+from ..sensitivity import PAPER_STUDY, coefficients, single_variable
+from .main import cli
+from .options import echo_json, json_option, load_params, overwrite_option, params_options
+
+
+@cli.command("sensitivity")
+@params_options
+@click.option("--parameters", default=",".join(PAPER_STUDY), show_default=True, help="Parameters to vary.")
+@click.option("--factors", default="0.8,1.0,1.2", show_default=True, help="Scale factors of the single-variable study.")
+@click.option("--n-max", type=click.IntRange(1, 100), default=10, show_default=True)
+@click.option("--csv", "csv_out", type=click.Path(dir_okay=False, path_type=Path), help="Study table as CSV.")
+@click.option("--plot", "plot_out", type=click.Path(dir_okay=False, path_type=Path), help="∂ln f/∂ln p against n.")
+@overwrite_option
+@json_option
+def sensitivity_cmd(params_file, param_items, parameters, factors, n_max, csv_out, plot_out, overwrite, as_json):
+    """How each parameter moves the frequencies (80/100/120 % study and normalised coefficients)."""
+    for o in (csv_out, plot_out):
+        if o is not None:
+            check_overwrite(o, overwrite)
+    p, effects = load_params(params_file, param_items)
+    names = tuple(x.strip() for x in parameters.split(",") if x.strip())
+    try:
+        facs = tuple(float(x) for x in factors.split(","))
+    except ValueError:
+        raise click.BadParameter(f"{factors!r} is not a list of numbers", param_hint="--factors") from None
+    study = single_variable(p, names, facs, n_max, effects or None)
+    ns, br, S = coefficients(p, names, n_max, effects or None)
+    if csv_out:
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=list(study[0]), lineterminator="\n")
+        w.writeheader()
+        w.writerows(study)
+        write_text_atomic(csv_out, buf.getvalue(), overwrite=overwrite)
+    if plot_out:
+        from ..plots import plot_sensitivity, save_figure
+
+        ax = plot_sensitivity(ns, br, S, names)
+        save_figure(ax[0].figure, plot_out, overwrite=overwrite)
+    coef = [{"n": int(n), "branch": b, **{name: float(S[i, j]) for j, name in enumerate(names)}}
+            for i, (n, b) in enumerate(zip(ns, br))]
+    if as_json:
+        echo_json({"parameters": p.to_dict(), "study": study, "coefficients": coef})
+        return
+    click.echo(f"∂ln f/∂ln p{'':>6}" + "".join(f"{n:>9}" for n in names))
+    for c in coef:
+        click.echo(f"n={c['n']:<3d}{c['branch']:>9}   " + "".join(f"{c[n]:9.3f}" for n in names))

@@ -1,0 +1,345 @@
+"""Structural parameters of the tyre model from a modal table.
+
+Measured modes with a circumferential order n and a branch (same/opposite) are matched
+to the model's (n, branch) frequencies; the free parameters are found by a global
+evolutionary search (``scipy.optimize.differential_evolution``, seeded) over the log of
+each parameter within its bounds, then polished by ``scipy.optimize.least_squares``.
+The objective is the RMS of the relative frequency errors (the paper's Eq. 18), or of
+errors weighted by each frequency's uncertainty. Standard errors and correlations come
+from the Jacobian at the optimum; predictions of unmeasured orders carry their
+uncertainty by linear propagation.
+
+References
+----------
+Storn & Price (1997), Differential evolution, J. Global Optim. 11.
+Bates & Watts (1988), *Nonlinear Regression Analysis and its Applications* (standard errors).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.optimize
+
+from .errors import DataFormatError, ParameterError
+from .model import TyreParameters, closed_form_hz, solve_modes
+
+__all__ = ["MeasuredMode", "FitOptions", "FitResult", "DEFAULT_BOUNDS", "model_frequencies", "fit",
+           "modes_from_rows", "predict_table", "PAPER_GA"]
+
+#: Search bounds of each parameter (SI; see docs/model.md for units).
+DEFAULT_BOUNDS = {"k_r1": (1e5, 1e8), "k_r2": (1e5, 1e8), "EI": (0.1, 1e4), "rhoA": (1.0, 200.0),
+                  "m_s": (0.5, 200.0), "m_w": (1.0, 1e5), "b": (0.02, 2.0)}
+#: The paper's genetic-algorithm settings, mapped onto differential evolution.
+PAPER_GA = {"population": 20, "generations": 300, "crossover": 0.7, "mutation": 0.1}
+
+
+@dataclass(frozen=True)
+class MeasuredMode:
+    """One measured mode matched to the model: order, branch, frequency (Hz)."""
+
+    n: int
+    branch: str
+    frequency_hz: float
+    damping_ratio: float | None = None
+    uncertainty_hz: float | None = None
+    source: str = ""
+
+
+@dataclass(frozen=True)
+class FitOptions:
+    """What to fit and how.
+
+    free : parameters to identify (the rest stay at ``base``)
+    bounds : {name: (lo, hi)} overrides of :data:`DEFAULT_BOUNDS` (both > 0)
+    weights : "relative" (the paper's RMS of relative errors) or "uncertainty"
+    population, generations, crossover, mutation : differential evolution settings
+        (``population`` is the number of members; ``mutation`` a constant or a dithering
+        range). :data:`PAPER_GA` holds the paper's GA settings (population 20, 300
+        generations, crossover 0.7, mutation 0.1); its generation gap (0.9) has no
+        counterpart in DE, which replaces each member by a better trial one for one.
+    seed : random seed of the search
+    effects : {name: {param: value}} candidate effects switched on (fixed values), and
+    effect_free : [(effect, param)] effect parameters fitted too (``diagnose``)
+    error_floor : relative frequency uncertainty below which the residual variance is not
+        taken for the standard errors (0.1 %: an impact test's frequencies)
+    """
+
+    free: tuple[str, ...] = ("k_r1", "k_r2", "EI")
+    bounds: dict = field(default_factory=dict)
+    weights: str = "relative"
+    population: int = 45
+    generations: int = 300
+    crossover: float = 0.7
+    mutation: float | tuple = (0.5, 1.0)
+    seed: int = 0
+    effects: dict = field(default_factory=dict)
+    effect_free: tuple = ()
+    error_floor: float = 1e-3
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """An identification.
+
+    parameters : TyreParameters at the optimum; effects : {name: {param: value}}
+    free : names of the fitted quantities (``"k_r1"`` or ``"effect.param"``)
+    values, std_errors : (n_free,) arrays ; correlation : (n_free, n_free)
+    undetermined : {name: reason} parameters the data cannot determine
+    modes : list of dict (n, branch, measured_hz, model_hz, error_pct)
+    rms_error_pct, max_error_pct : float
+    history : list of (generation, best objective)
+    jacobian : (n_modes, n_free) of relative errors w.r.t. log parameters
+    """
+
+    parameters: TyreParameters
+    effects: dict
+    free: tuple
+    values: np.ndarray
+    std_errors: np.ndarray
+    correlation: np.ndarray
+    undetermined: dict
+    modes: list
+    rms_error_pct: float
+    max_error_pct: float
+    history: list
+    jacobian: np.ndarray
+    covariance_log: np.ndarray
+    options: FitOptions
+
+
+def modes_from_rows(rows, *, min_confidence: float = 0.5, source: str = "") -> tuple[list[MeasuredMode], list[dict]]:
+    """Measured modes usable for a fit, from table rows (``lsce`` JSON/CSV or a Table A1 CSV).
+
+    Matching rules (docs/identify.md): a row needs ``frequency_hz`` > 0, an integer ``n`` ≥ 0
+    and ``branch`` in {same, opposite}; rows with ``n_confidence`` below ``min_confidence``
+    are left out; the two members of a split pair (one n and branch twice) enter as their
+    mean frequency. Returns the modes and the rows left out with their reasons.
+    """
+    kept, skipped = {}, []
+    for i, r in enumerate(rows):
+        def get(k):
+            v = r.get(k)
+            return None if v is None or (isinstance(v, str) and v.strip() == "") else v
+        try:
+            f = float(get("frequency_hz"))
+        except (TypeError, ValueError):
+            skipped.append({"row": i + 1, "reason": "no frequency_hz"})
+            continue
+        n, b = get("n"), get("branch")
+        if n is None or b is None:
+            skipped.append({"row": i + 1, "frequency_hz": f, "reason": "no n or branch"})
+            continue
+        try:
+            n = int(float(n))
+        except ValueError:
+            skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"n={n!r} is not an integer"})
+            continue
+        b = str(b).strip().lower()
+        if b not in ("same", "opposite") or n < 0 or not f > 0:
+            skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"branch {b!r} / n {n} not fitted"})
+            continue
+        conf = get("n_confidence")
+        if conf is not None and float(conf) < min_confidence:
+            skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"n_confidence {float(conf):.2f} < {min_confidence}"})
+            continue
+        z = get("damping_ratio")
+        u = get("frequency_uncertainty_hz")
+        kept.setdefault((n, b), []).append((f, None if z is None else float(z), None if u is None else float(u)))
+    modes = []
+    for (n, b), vals in sorted(kept.items(), key=lambda kv: np.mean([v[0] for v in kv[1]])):
+        f = float(np.mean([v[0] for v in vals]))
+        zs = [v[1] for v in vals if v[1] is not None]
+        us = [v[2] for v in vals if v[2] is not None]
+        modes.append(MeasuredMode(n, b, f, float(np.mean(zs)) if zs else None, float(np.mean(us)) if us else None,
+                                  source=source if len(vals) == 1 else f"{source} (mean of a split pair)"))
+    return modes, skipped
+
+
+def model_frequencies(p: TyreParameters, ns, branches, effects=None) -> np.ndarray:
+    """Model frequencies (Hz) of the given (n, branch) pairs.
+
+    The seed model uses the closed form (and the 3 × 3 problem for n = 1 with a rim);
+    with effects, the general block solver.
+    """
+    ns = np.asarray(ns, dtype=int)
+    br = np.asarray(branches)
+    out = np.full(ns.size, np.nan)
+    if not effects:
+        cf = closed_form_hz(ns, p)
+        col = (br == "opposite").astype(int)
+        out = cf[np.arange(ns.size), col]
+        if p.m_w is not None and np.any(ns == 1):
+            m = solve_modes(p, n_max=1)
+            for i in np.flatnonzero(ns == 1):
+                sel = (m.n == 1) & (np.array(m.branch) == br[i]) & (np.array(m.harmonic) == "cos")
+                out[i] = m.freq_hz[sel][0] if sel.any() else np.nan
+        return out
+    m = solve_modes(p, n_max=max(2, int(ns.max())), effects=effects)
+    mb = np.array(m.branch)
+    for i, (n, b) in enumerate(zip(ns, br)):
+        sel = (m.n == n) & (mb == b)
+        if sel.any():
+            out[i] = m.freq_hz[sel].min()
+    return out
+
+
+def _split_free(opt: FitOptions):
+    names = list(opt.free) + [f"{e}.{k}" for e, k in opt.effect_free]
+    bounds = []
+    from .effects import get_effect
+
+    for name in opt.free:
+        if name not in DEFAULT_BOUNDS:
+            raise ParameterError(f"cannot fit {name!r}; allowed: {', '.join(DEFAULT_BOUNDS)}")
+        lo, hi = opt.bounds.get(name, DEFAULT_BOUNDS[name])
+        bounds.append((float(lo), float(hi)))
+    for e, k in opt.effect_free:
+        par = {q.name: q for q in get_effect(e).parameters}[k]
+        lo, hi = opt.bounds.get(f"{e}.{k}", (par.lower, par.upper))
+        bounds.append((float(max(lo, 1e-12 * max(hi, 1.0))), float(hi)))
+    for name, (lo, hi) in zip(names, bounds):
+        if not (lo > 0 and hi > lo and math.isfinite(hi)):
+            raise ParameterError(f"bounds of {name}: ({lo:g}, {hi:g}) must be positive and increasing")
+    return names, np.log(np.array(bounds))
+
+
+def _apply(base: TyreParameters, opt: FitOptions, names, logx):
+    vals = np.exp(logx)
+    p_changes = {n: float(v) for n, v in zip(names, vals) if "." not in n}
+    eff = {k: dict(v) for k, v in opt.effects.items()}
+    for n, v in zip(names, vals):
+        if "." in n:
+            e, k = n.split(".", 1)
+            eff.setdefault(e, {})[k] = float(v)
+    return dataclasses.replace(base, **p_changes), eff
+
+
+def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt: FitOptions = FitOptions(),
+        *, progress=None) -> FitResult:
+    """Identify the free parameters from measured (n, branch, frequency) modes.
+
+    Raises ParameterError/DataFormatError for no usable modes, fewer modes than free
+    parameters, unknown parameters or bad bounds.
+    """
+    if not modes:
+        raise DataFormatError("no usable modes: a fit needs modes with n and branch (same/opposite)")
+    names, logb = _split_free(opt)
+    if len(modes) < len(names):
+        raise DataFormatError(f"{len(modes)} usable modes for {len(names)} free parameters; need at least as many")
+    if opt.weights not in ("relative", "uncertainty"):
+        raise ParameterError(f"weights={opt.weights!r}; allowed: relative, uncertainty")
+    if "m_w" in opt.free and base.m_w is None:
+        base = dataclasses.replace(base, m_w=1000.0)
+    ns = np.array([m.n for m in modes])
+    br = np.array([m.branch for m in modes])
+    f_meas = np.array([m.frequency_hz for m in modes])
+    if opt.weights == "uncertainty":
+        # σ_f: the given uncertainty, else a fifth of the half-power half-bandwidth ζ f
+        sig = np.array([m.uncertainty_hz if m.uncertainty_hz else max((m.damping_ratio or 0.02) * m.frequency_hz / 5,
+                                                                     1e-4 * m.frequency_hz) for m in modes])
+        w = f_meas / sig
+    else:
+        w = np.ones(len(modes))
+    w = w / np.sqrt(np.mean(w**2))
+
+    def residuals(logx):
+        p, eff = _apply(base, opt, names, logx)
+        f = model_frequencies(p, ns, br, eff or None)
+        r = (f - f_meas) / f_meas
+        return np.where(np.isfinite(r), r, 10.0) * w
+
+    def objective(logx):
+        return float(np.sqrt(np.mean(residuals(logx) ** 2)))
+
+    history = []
+
+    def callback(intermediate_result):
+        history.append((len(history) + 1, float(intermediate_result.fun)))
+        if progress:
+            progress(len(history), opt.generations)
+
+    k = len(names)
+    de = scipy.optimize.differential_evolution(
+        objective, bounds=list(map(tuple, logb)), popsize=max(1, math.ceil(opt.population / k)),
+        maxiter=opt.generations, recombination=opt.crossover,
+        mutation=tuple(opt.mutation) if isinstance(opt.mutation, (tuple, list)) else opt.mutation, seed=opt.seed, tol=1e-10,
+        atol=0, polish=False, updating="deferred", workers=1, callback=callback, init="latinhypercube")
+    ls = scipy.optimize.least_squares(residuals, de.x, bounds=(logb[:, 0], logb[:, 1]), x_scale=1.0,
+                                      xtol=1e-14, ftol=1e-14, gtol=1e-14)
+    x = ls.x if objective(ls.x) <= de.fun else de.x
+    history.append((len(history) + 1, objective(x)))
+    J = _jacobian(residuals, x)
+    r = residuals(x)
+    dof = max(len(modes) - k, 1)
+    # residual variance, but never below the floor of a measured frequency's uncertainty:
+    # a perfect fit of a few modes does not make a parameter known better than the data are
+    s2 = max(float(r @ r) / dof, opt.error_floor**2)
+    JtJ = J.T @ J
+    cov = s2 * np.linalg.pinv(JtJ, rcond=1e-12)
+    se_log = np.sqrt(np.clip(np.diag(cov), 0, None))
+    vals = np.exp(x)
+    se = vals * se_log  # d p = p d ln p
+    d = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
+    corr = cov / np.outer(d, d)
+    undetermined = {}
+    sens = np.sqrt(np.mean(J**2, axis=0))
+    for i, name in enumerate(names):
+        at_bound = x[i] - logb[i, 0] < 1e-3 or logb[i, 1] - x[i] < 1e-3
+        if sens[i] < 1e-4:
+            undetermined[name] = (f"the measured modes hardly depend on it (RMS ∂ln f/∂ln p = {sens[i]:.1e})")
+        elif se_log[i] > 0.5:
+            undetermined[name] = f"relative standard error {100 * se_log[i]:.0f} %"
+        elif at_bound:
+            undetermined[name] = "at a bound of the search"
+    p, eff = _apply(base, opt, names, x)
+    f_mod = model_frequencies(p, ns, br, eff or None)
+    err = 100 * (f_mod - f_meas) / f_meas
+    table = [{"n": int(m.n), "branch": m.branch, "measured_hz": m.frequency_hz, "model_hz": float(fm),
+              "error_pct": float(e)} for m, fm, e in zip(modes, f_mod, err)]
+    return FitResult(parameters=p, effects=eff, free=tuple(names), values=vals, std_errors=se, correlation=corr,
+                     undetermined=undetermined, modes=table, rms_error_pct=float(np.sqrt(np.mean(err**2))),
+                     max_error_pct=float(np.max(np.abs(err))), history=history, jacobian=J, covariance_log=cov,
+                     options=opt)
+
+
+def _jacobian(fun, x, h=1e-6):
+    f0 = fun(x)
+    J = np.empty((f0.size, x.size))
+    for i in range(x.size):
+        dx = np.zeros_like(x)
+        dx[i] = h
+        J[:, i] = (fun(x + dx) - fun(x - dx)) / (2 * h)
+    return J
+
+
+def predict_table(res: FitResult, n_max: int, *, measured=()) -> list[dict]:
+    """Model frequencies of every (n, branch) up to ``n_max`` with 1σ uncertainty.
+
+    The uncertainty propagates the fit's covariance (in log parameters) through a
+    numerical Jacobian of each frequency.
+    """
+    names = res.free
+    logx = np.log(res.values)
+    opt = res.options
+    base = res.parameters
+    ns = np.repeat(np.arange(0, n_max + 1), 2)
+    br = np.array(["same", "opposite"] * (n_max + 1))
+
+    def f_of(lx):
+        p, eff = _apply(base, opt, names, lx)
+        return model_frequencies(p, ns, br, eff or None)
+
+    f0 = f_of(logx)
+    J = np.empty((f0.size, logx.size))
+    for i in range(logx.size):
+        d = np.zeros_like(logx)
+        d[i] = 1e-6
+        J[:, i] = (f_of(logx + d) - f_of(logx - d)) / 2e-6
+    var = np.einsum("ij,jk,ik->i", J, res.covariance_log, J)
+    meas = {(m["n"], m["branch"]) for m in measured}
+    return [{"n": int(n), "branch": b, "model_hz": float(f), "std_hz": float(np.sqrt(max(v, 0))),
+             "measured": (int(n), b) in meas} for n, b, f, v in zip(ns, br, f0, var)]
