@@ -156,3 +156,19 @@ def test_cli_predict_and_sensitivity(tmp_path):
     assert len(d["study"]) == 6 * 3 * 12 and len(d["coefficients"]) == 12
     res = run_cli(["sensitivity", "--parameters", "zeta"])
     assert res.exit_code == 2 and "no sensitivity to 'zeta'" in res.stderr
+
+
+def test_predict_compares_model_and_measured_frfs(tmp_path):
+    from tiremodal_cli.frf import compute_frf
+    from tiremodal_cli.frffile import write_frf
+    from tiremodal_cli.simulate import SimulationConfig, simulate
+
+    s = simulate(SimulationConfig(n_points=8, n_hits=1, sample_rate=512.0, n_samples=1024, seed=2,
+                                  params=TyreParameters(m_w=1000.0)))
+    write_frf(tmp_path / "f.h5", compute_frf(s.measurement))
+    res = run_cli(["predict", "--param", "m_w=1000", "--compare-frf", tmp_path / "f.h5", "--plot-frf",
+                   tmp_path / "c.png", "--point", 2])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "c.png").read_bytes()[:4] == b"\x89PNG"
+    res = run_cli(["predict", "--compare-frf", tmp_path / "f.h5", "--plot-frf", tmp_path / "d.png", "--point", 9])
+    assert res.exit_code == 2 and "--point 9 is not in 1…8" in res.stderr

@@ -20,15 +20,26 @@ from .options import echo_json, json_option, load_params, overwrite_option, para
 @click.option("--n-max", type=click.IntRange(1, 200), default=12, show_default=True, help="Highest order listed.")
 @click.option("--csv", "csv_out", type=click.Path(dir_okay=False, path_type=Path), help="Write the table as CSV.")
 @click.option("--plot", "plot_out", type=click.Path(dir_okay=False, path_type=Path), help="Frequency against n.")
+@click.option("--compare-frf", type=click.Path(dir_okay=False, path_type=Path),
+              help="An FRF file: draw the model's FRFs over the measured ones (the paper's Fig. 9).")
+@click.option("--plot-frf", type=click.Path(dir_okay=False, path_type=Path), help="Where to draw that comparison.")
+@click.option("--point", type=click.IntRange(1), default=1, show_default=True, help="Impact point of the comparison.")
+@click.option("--damping", type=click.FloatRange(0, 1, min_open=True, max_open=True),
+              help="Modal damping for the model's FRFs (default: the paper's by n and branch).")
 @overwrite_option
 @json_option
-def predict_cmd(params_file, param_items, n_max, csv_out, plot_out, overwrite, as_json):
+def predict_cmd(params_file, param_items, n_max, csv_out, plot_out, compare_frf, plot_frf, point, damping, overwrite,
+                as_json):
     """Modes of the model: frequency of every (n, branch) up to --n-max (the cos members)."""
-    for o in (csv_out, plot_out):
+    for o in (csv_out, plot_out, plot_frf):
         if o is not None:
             check_overwrite(o, overwrite)
+    if (compare_frf is None) != (plot_frf is None):
+        raise click.UsageError("--compare-frf and --plot-frf go together")
     p, effects = load_params(params_file, param_items)
     m = solve_modes(p, n_max=max(n_max, 2), effects=effects or None)
+    if compare_frf is not None:
+        _compare(p, effects, compare_frf, plot_frf, point, damping, overwrite)
     rows = [{"n": int(n), "branch": b, "frequency_hz": float(f), "damping_ratio_default": paper_damping(int(n), b)}
             for f, n, h, b in zip(m.freq_hz, m.n, m.harmonic, m.branch) if h in ("cos", "mixed") and n <= n_max]
     if csv_out:
@@ -48,3 +59,27 @@ def predict_cmd(params_file, param_items, n_max, csv_out, plot_out, overwrite, a
         click.echo(f"{'n':>3} {'branch':>9} {'f [Hz]':>10}")
         for r in rows:
             click.echo(f"{r['n']:3d} {r['branch']:>9} {r['frequency_hz']:10.3f}")
+
+
+def _compare(p, effects, frf_path, out, point, damping, overwrite):
+    """Model FRFs at the test's geometry over the measured ones, for every live channel."""
+    from ..errors import DataFormatError
+    from ..frffile import read_frf
+    from ..model import frf as model_frf
+    from ..plots import plot_synthesis, save_figure
+
+    r = read_frf(frf_path)
+    if not 1 <= point <= r.point_angle.size:
+        raise DataFormatError(f"--point {point} is not in 1…{r.point_angle.size}")
+    if not np.all(np.isfinite(r.point_angle)):
+        raise DataFormatError(f"{frf_path}: point angles unknown; the model needs them")
+    m = solve_modes(p, n_max=30, effects=effects or None)
+    zeta = np.array([damping if damping else paper_damping(int(n), b) for n, b in zip(m.n, m.branch)])
+    live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels
+            and r.channel_location[i] in ("tread", "sidewall", "rim")]
+    H = model_frf(m, r.freq_hz, zeta, [r.channel_location[i] for i in live], r.channel_angle[live],
+                  r.point_angle[[point - 1]], form=r.form)[:, 0]
+    ax = plot_synthesis(r.freq_hz, r.H[live, point - 1], H,
+                        labels=[f"{r.channel_name[i]} / point {point}" for i in live])
+    ax.set_ylabel("|H| (solid: measured, dashed: model)")
+    save_figure(ax.figure, out, overwrite=overwrite)
