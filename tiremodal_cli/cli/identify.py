@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
 from pathlib import Path
 
 import click
@@ -13,7 +11,7 @@ from ..files import check_overwrite, write_text_atomic
 from ..identify import PAPER_GA, FitOptions, fit, modes_from_rows, predict_table
 from .main import cli
 from .options import (Progress, echo_json, json_option, load_params, overwrite_option, params_options,
-                      read_table_rows)
+                      read_table_rows, rows_to_csv)
 
 
 def fit_options(free, bounds, weights, seed, paper_ga, population, generations):
@@ -106,11 +104,7 @@ def identify_cmd(modes_file, params_file, param_items, free, bounds, weights, se
     preds = predict_table(res, predict_n, measured=res.modes)
     report = fit_report(res, skipped, preds)
     if csv_out:
-        buf = io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=["n", "branch", "measured_hz", "model_hz", "error_pct"], lineterminator="\n")
-        w.writeheader()
-        w.writerows(res.modes)
-        write_text_atomic(csv_out, buf.getvalue(), overwrite=overwrite)
+        write_text_atomic(csv_out, rows_to_csv(res.modes), overwrite=overwrite)
     if plot_fit or plot_convergence:
         from ..plots import plot_convergence as pc, plot_dispersion, save_figure
 

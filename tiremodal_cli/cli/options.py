@@ -107,3 +107,15 @@ def read_table_rows(path: Path):
 
         raise DataFormatError(f"{path}: format {fmt!r} is not a modal file or CSV; run 'tiremodal lsce' first")
     return to_rows(read_modal(path))
+
+
+def rows_to_csv(rows, fieldnames=None) -> str:
+    """CSV text of a list of dicts (header from the first row unless given)."""
+    import csv
+    import io
+
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(fieldnames or rows[0]), lineterminator="\n", extrasaction="ignore")
+    w.writeheader()
+    w.writerows(rows)
+    return buf.getvalue()

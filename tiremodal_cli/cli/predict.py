@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
 from pathlib import Path
 
 import click
@@ -12,7 +10,7 @@ import numpy as np
 from ..files import check_overwrite, write_text_atomic
 from ..model import paper_damping, solve_modes
 from .main import cli
-from .options import echo_json, json_option, load_params, overwrite_option, params_options
+from .options import echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
 
 
 @cli.command("predict")
@@ -43,11 +41,7 @@ def predict_cmd(params_file, param_items, n_max, csv_out, plot_out, compare_frf,
     rows = [{"n": int(n), "branch": b, "frequency_hz": float(f), "damping_ratio_default": paper_damping(int(n), b)}
             for f, n, h, b in zip(m.freq_hz, m.n, m.harmonic, m.branch) if h in ("cos", "mixed") and n <= n_max]
     if csv_out:
-        buf = io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
-        w.writeheader()
-        w.writerows(rows)
-        write_text_atomic(csv_out, buf.getvalue(), overwrite=overwrite)
+        write_text_atomic(csv_out, rows_to_csv(rows), overwrite=overwrite)
     if plot_out:
         from ..plots import plot_dispersion, save_figure
 

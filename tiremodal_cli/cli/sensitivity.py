@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
 from pathlib import Path
 
 import click
@@ -12,7 +10,7 @@ import numpy as np
 from ..files import check_overwrite, write_text_atomic
 from ..sensitivity import PAPER_STUDY, coefficients, single_variable
 from .main import cli
-from .options import echo_json, json_option, load_params, overwrite_option, params_options
+from .options import echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
 
 
 @cli.command("sensitivity")
@@ -38,11 +36,7 @@ def sensitivity_cmd(params_file, param_items, parameters, factors, n_max, csv_ou
     study = single_variable(p, names, facs, n_max, effects or None)
     ns, br, S = coefficients(p, names, n_max, effects or None)
     if csv_out:
-        buf = io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=list(study[0]), lineterminator="\n")
-        w.writeheader()
-        w.writerows(study)
-        write_text_atomic(csv_out, buf.getvalue(), overwrite=overwrite)
+        write_text_atomic(csv_out, rows_to_csv(study), overwrite=overwrite)
     if plot_out:
         from ..plots import plot_sensitivity, save_figure
 
