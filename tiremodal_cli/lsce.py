@@ -38,7 +38,7 @@ import scipy.linalg
 from .errors import DataFormatError, ParameterError
 
 __all__ = ["Band", "band_lines", "principal_responses", "normal_matrix", "sweep", "OrderPoles",
-           "poles_to_modal", "residues_time"]
+           "poles_to_modal"]
 
 
 @dataclass(frozen=True)
@@ -216,26 +216,3 @@ def _companion(alpha):
     if p > 1:
         C[1:, :-1] = np.eye(p - 1)
     return C
-
-
-def residues_time(band: Band, z, *, max_samples: int = 512) -> np.ndarray:
-    """Amplitudes of each exponential in each principal impulse response.
-
-    Solves ``h[m] = Σ_r c_r z_r^m`` in least squares over the first ``max_samples``
-    samples (the early, strong part of the responses), with the Gram matrix in closed form
-    (``Σ_m (z̄_r z_s)^m`` is a geometric series).
-
-    Returns
-    -------
-    c : (n_poles, r) complex ndarray     amplitudes in the principal space (map with ``band.U``)
-    """
-    z = np.asarray(z, dtype=complex)
-    z = np.where(np.abs(z) > 1, z / np.abs(z), z)  # growing roots are computational: cap at |z| = 1
-    L = min(band.irf.shape[-1], max_samples)
-    q = np.conj(z)[:, None] * z[None, :]
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        G = np.where(np.abs(1 - q) > 1e-12, (1 - q**L) / (1 - q), L)
-    V = np.vander(z, L, increasing=True)  # (p, L): z_r^m by repeated products
-    b = V.conj() @ band.irf[:, :L].T  # (p, r)
-    # close poles make G ill-conditioned: a truncated least squares (gelsy, rcond 1e-10)
-    return scipy.linalg.lstsq(G, b, cond=1e-10, lapack_driver="gelsy")[0]

@@ -18,7 +18,7 @@ from .errors import DataFormatError, ParameterError
 from .lsce import poles_to_modal, principal_responses, sweep
 from .lsfd import lsfd, mpc, significance
 from .spatial import decompose
-from .stabilization import Diagram, StabilizationOptions, stabilize
+from .stabilization import StabilizationOptions, stabilize
 from .windows import correct_poles
 
 log = logging.getLogger(__name__)

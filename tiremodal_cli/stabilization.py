@@ -14,7 +14,6 @@ damping. Every decision is kept (``Cluster.reason``) so the choice can be explai
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np

@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
-import numpy as np
 
 from ..files import check_overwrite, write_text_atomic
 from ..sensitivity import PAPER_STUDY, coefficients, single_variable
