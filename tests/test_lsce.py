@@ -202,5 +202,5 @@ def test_nested_orders_equal_a_least_squares_rebuilt_per_order():
     alpha = np.linalg.lstsq(rows[:, :p], -rows[:, p], rcond=None)[0]
     assert_allclose(np.linalg.solve(R[:p, :p], -R[:p, p]), alpha, rtol=1e-5, atol=1e-9)  # normal eqs: cond²
     z_ref = np.sort_complex(np.roots(np.r_[1, alpha[::-1]]))
-    z = np.sort_complex(sweep(b, [p], max_rows=L)[0].z)
+    z = np.sort_complex(sweep(b, [p, p_max], max_rows=L)[0].z)  # order p from the p_max matrix
     assert_allclose(z, z_ref, rtol=1e-5, atol=1e-8)
