@@ -89,10 +89,13 @@ def test_modes_from_rows_rules():
             {"frequency_hz": "61", "n": "2", "branch": "same"},  # split pair member: mean
             {"frequency_hz": "70", "n": "", "branch": "same"},
             {"frequency_hz": "80", "n": "3", "branch": "rim"},
-            {"frequency_hz": "90", "n": "4", "branch": "opposite", "n_confidence": "0.2"}]
+            {"frequency_hz": "90", "n": "4", "branch": "opposite", "n_confidence": "0.2"},
+            {"frequency_hz": "95", "n": "5", "branch": "opposite", "mpc": "0.1"},
+            {"frequency_hz": "100", "n": "6", "branch": "same", "significance": "0.9"},
+            {"frequency_hz": "130", "n": "6", "branch": "same", "significance": "0.2"}]  # a misread order
     modes, skipped = modes_from_rows(rows)
-    assert [(m.n, m.branch, m.frequency_hz) for m in modes] == [(2, "same", 60.5)]
-    assert len(skipped) == 3
+    assert [(m.n, m.branch, m.frequency_hz) for m in modes] == [(2, "same", 60.5), (6, "same", 100.0)]
+    assert len(skipped) == 5 and "not a split pair" in skipped[-1]["reason"]
 
 
 @pytest.mark.parametrize("csv_text, args, msg", [

@@ -111,13 +111,16 @@ class FitResult:
     options: FitOptions
 
 
-def modes_from_rows(rows, *, min_confidence: float = 0.5, source: str = "") -> tuple[list[MeasuredMode], list[dict]]:
+def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
+                    source: str = "") -> tuple[list[MeasuredMode], list[dict]]:
     """Measured modes usable for a fit, from table rows (``lsce`` JSON/CSV or a Table A1 CSV).
 
     Matching rules (docs/identify.md): a row needs ``frequency_hz`` > 0, an integer ``n`` ≥ 0
     and ``branch`` in {same, opposite}; rows with ``n_confidence`` below ``min_confidence``
-    are left out; the two members of a split pair (one n and branch twice) enter as their
-    mean frequency. Returns the modes and the rows left out with their reasons.
+    are left out, and so are rows with ``mpc`` below ``min_mpc`` (not a normal mode); the two
+    members of a split pair (one n and branch twice, within 5 %) enter as their mean
+    frequency; of one n and branch twice farther apart, the more significant row stays.
+    Returns the modes and the rows left out with their reasons.
     """
     kept, skipped = {}, []
     for i, r in enumerate(rows):
@@ -146,11 +149,26 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, source: str = "") -> t
         if conf is not None and float(conf) < min_confidence:
             skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"n_confidence {float(conf):.2f} < {min_confidence}"})
             continue
+        mpc = get("mpc")
+        if mpc is not None and float(mpc) < min_mpc:
+            skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"mpc {float(mpc):.2f} < {min_mpc}: not a normal mode"})
+            continue
         z = get("damping_ratio")
         u = get("frequency_uncertainty_hz")
-        kept.setdefault((n, b), []).append((f, None if z is None else float(z), None if u is None else float(u)))
+        sig = get("significance")
+        kept.setdefault((n, b), []).append((f, None if z is None else float(z), None if u is None else float(u),
+                                            1.0 if sig is None else float(sig), i + 1))
     modes = []
     for (n, b), vals in sorted(kept.items(), key=lambda kv: np.mean([v[0] for v in kv[1]])):
+        if len(vals) > 1:
+            # members of a split pair lie close together; a far "duplicate" is a misread
+            # order (an alias, a spurious pole): keep the strongest, skip the rest
+            vals.sort(key=lambda v: -v[3])
+            far = [v for v in vals[1:] if abs(v[0] / vals[0][0] - 1) > 0.05]
+            for v in far:
+                skipped.append({"row": v[4], "frequency_hz": v[0],
+                                "reason": f"n={n} {b} already at {vals[0][0]:.2f} Hz (not a split pair: > 5 % apart)"})
+            vals = [v for v in vals if v not in far]
         f = float(np.mean([v[0] for v in vals]))
         zs = [v[1] for v in vals if v[1] is not None]
         us = [v[2] for v in vals if v[2] is not None]
