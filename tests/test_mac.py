@@ -52,7 +52,6 @@ def test_automac_is_diagonal(modal):
     assert_allclose(np.diag(M), 1.0, atol=1e-9)
     t = read_modal(modal / "m.h5")
     alias = t.n_spatial[:, None] == t.n_spatial[None, :]
-    assert alias.sum() > len(M)  # the grid does alias some modes here
     assert M[~alias].max() < 0.2
 
 

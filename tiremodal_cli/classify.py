@@ -13,6 +13,8 @@
 * **confidences**: ``n_confidence`` is the winning order's energy share; the branch's is
   |Re ρ| / (‖t‖‖s‖) with ρ = tᴴs the tread–sidewall product (1: perfectly in or out of
   phase). A mode whose tread barely moves (high-n same-direction modes) gets a low one.
+* **dispersion order**: a mode whose n exceeds that of a higher, at least as significant
+  mode of its branch is flagged ``in_order = False`` (``identify`` leaves it out).
 * **split pairs**: two modes with one (n, branch) within 5 % in frequency are the cos/sin
   members of a pair split by a broken symmetry; both are reported, with the splitting.
 """
@@ -38,11 +40,12 @@ class Classification:
     branch_confidence: float = 0.0
     pair: int | None = None
     splitting_hz: float | None = None
+    in_order: bool = True
 
     def to_dict(self):
         return {"n": self.n, "n_spatial": self.n_spatial, "n_confidence": self.n_confidence,
                 "n_aliased": self.aliased, "branch": self.branch, "branch_confidence": self.branch_confidence,
-                "pair": self.pair, "splitting_hz": self.splitting_hz}
+                "pair": self.pair, "splitting_hz": self.splitting_hz, "in_order": self.in_order}
 
 
 def _real(v):
@@ -124,6 +127,16 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None) 
             clear = out[r][1] >= 0.5 and out[r][3] >= 0.5 and (significance is None or significance[r] >= 0.3)
             if clear:
                 top = max(top, n)
+    # dispersion order: within a branch n rises with frequency; a mode whose n exceeds that
+    # of a higher, at least as significant mode of its branch is out of order (a misread)
+    sig = np.ones(len(out)) if significance is None else np.asarray(significance)
+    in_order = np.ones(len(out), dtype=bool)
+    for r in range(len(out)):
+        for q in range(len(out)):
+            if (q != r and out[q][2] == out[r][2] and freq_hz[q] > freq_hz[r] and ns[q] < ns[r]
+                    and sig[q] >= sig[r]):
+                in_order[r] = False
+                break
     # split pairs
     res = []
     pair_id = {}
@@ -139,5 +152,5 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None) 
         res.append(Classification(n=int(ns[r]), n_spatial=int(out[r][0]), n_confidence=out[r][1],
                                   aliased=bool(ns[r] != out[r][0]), branch=out[r][2],
                                   branch_confidence=out[r][3], pair=pid,
-                                  splitting_hz=split))
+                                  splitting_hz=split, in_order=bool(in_order[r])))
     return res

@@ -117,7 +117,8 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
 
     Matching rules (docs/identify.md): a row needs ``frequency_hz`` > 0, an integer ``n`` ≥ 0
     and ``branch`` in {same, opposite}; rows with ``n_confidence`` below ``min_confidence``
-    are left out, and so are rows with ``mpc`` below ``min_mpc`` (not a normal mode); the two
+    are left out, and so are rows with ``mpc`` below ``min_mpc`` (not a normal mode) and rows
+    flagged out of their branch's dispersion order (``in_order`` false, from lsce); the two
     members of a split pair (one n and branch twice, within 5 %) enter as their mean
     frequency; of one n and branch twice farther apart, the more significant row stays.
     Returns the modes and the rows left out with their reasons.
@@ -148,6 +149,10 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
         conf = get("n_confidence")
         if conf is not None and float(conf) < min_confidence:
             skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"n_confidence {float(conf):.2f} < {min_confidence}"})
+            continue
+        order_ok = get("in_order")
+        if order_ok is not None and str(order_ok).strip().lower() in ("false", "0"):
+            skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"n={n} {b} out of its branch's dispersion order"})
             continue
         mpc = get("mpc")
         if mpc is not None and float(mpc) < min_mpc:

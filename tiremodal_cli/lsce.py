@@ -37,7 +37,7 @@ import scipy.linalg
 
 from .errors import DataFormatError, ParameterError
 
-__all__ = ["Band", "band_lines", "principal_responses", "normal_matrix", "sweep", "OrderPoles",
+__all__ = ["Band", "band_lines", "principal_responses", "normal_matrix", "sweep", "sweep_poly", "OrderPoles",
            "poles_to_modal"]
 
 
@@ -161,6 +161,7 @@ class OrderPoles:
     z: np.ndarray
     freq_hz: np.ndarray
     damping_ratio: np.ndarray
+    participation: np.ndarray | None = None  # (n_poles, n_ref), poly-reference only
 
 
 def poles_to_modal(s):
@@ -216,3 +217,55 @@ def _companion(alpha):
     if p > 1:
         C[1:, :-1] = np.eye(p - 1)
     return C
+
+
+def sweep_poly(irf, orders, dt: float, f_lo: float, width_hz: float, *, max_rows: int | None = None
+               ) -> list[OrderPoles]:
+    """Poly-reference LSCE (Vold et al. 1982): matrix autoregression over several references.
+
+    ``irf`` (n_out, n_ref, L): impulse responses from every reference to every output.
+    The model ``h_o(m+p) + Σ_k h_o(m+k) W_k = 0`` (rows h_o(m) over the references, W_k
+    n_ref × n_ref) shares the W_k over outputs; a mode is ``h_o(m) = a_o z^m L`` with its
+    participation L, so p orders give p·n_ref poles and a root of multiplicity up to n_ref
+    — the two members of a split pair — is resolved. As in :func:`sweep`, the normal
+    matrix is built once for the highest order and each order uses its leading block.
+    """
+    h = np.asarray(irf)
+    n_out, n_ref, L = h.shape
+    orders = sorted({int(p) for p in orders})
+    p_max = orders[-1]
+    rows = max(8 * p_max * n_ref, 1024) if max_rows is None else max_rows
+    last = min(L - 1 - p_max, rows - 1)
+    if last + 1 < (p_max + 1) * n_ref:
+        raise ParameterError(f"model order {p_max} is too high for {L} impulse-response samples")
+    # X rows: (output, m) ; columns: (k, ref) for k = 0 … p_max
+    win = np.lib.stride_tricks.sliding_window_view(h, p_max + 1, axis=-1)[:, :, :last + 1]  # (o, r, m, k)
+    X = win.transpose(0, 2, 3, 1).reshape(n_out * (last + 1), (p_max + 1) * n_ref)
+    R = X.conj().T @ X
+    out = []
+    for p in orders:
+        a, b = p * n_ref, (p + 1) * n_ref
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+            try:
+                W = scipy.linalg.solve(R[:a, :a], -R[:a, a:b], assume_a="her")
+            except (scipy.linalg.LinAlgError, ValueError):
+                W = scipy.linalg.lstsq(R[:a, :a], -R[:a, a:b], lapack_driver="gelsy")[0]
+        # L (z^p I + Σ z^k W_k) = 0: eigenvalues of the block companion of A_k = W_kᵀ
+        A = [W[k * n_ref:(k + 1) * n_ref].T for k in range(p)]
+        C = np.zeros((a, a), dtype=complex)
+        for k in range(p):
+            C[:n_ref, k * n_ref:(k + 1) * n_ref] = -A[p - 1 - k]
+        if p > 1:
+            C[n_ref:, :-n_ref] = np.eye(a - n_ref)
+        z, V = np.linalg.eig(C)
+        keep = np.abs(z) > 0
+        z = z[keep]
+        part = V[-n_ref:, keep].T  # the companion eigenvector's last block is the participation L
+        part = part / np.maximum(np.linalg.norm(part, axis=1, keepdims=True), np.finfo(float).tiny)
+        lnz = np.log(z)
+        f_off = np.mod(lnz.imag / (2 * np.pi * dt), width_hz)
+        s = lnz.real / dt + 1j * 2 * np.pi * (f_lo + f_off)
+        fn, zeta = poles_to_modal(s)
+        out.append(OrderPoles(p, s, z, fn, zeta, part))
+    return out

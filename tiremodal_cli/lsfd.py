@@ -149,3 +149,46 @@ def significance(freq_hz, H, residues, s, *, form="accelerance") -> np.ndarray:
         den = np.linalg.norm(H[:, sel])
         out[r] = np.linalg.norm(Hr) / den if den > 0 else 0.0
     return out
+
+
+def lsfd_participation(freq_hz, Y, s, L, *, form: str = "accelerance"):
+    """LSFD with known participation factors (poly-reference).
+
+    ``Y`` (n_out, n_ref, K): FRFs from every reference to every output; mode r has
+    residues ψ_or L_r (L from the estimator, (n_modes, n_ref)), so each output has one
+    complex unknown per mode plus real lower/upper residuals per reference. Two close
+    poles with different participation stay apart, where a free residue per FRF would
+    trade them off against each other.
+
+    Returns
+    -------
+    residues : (n_out, n_ref, n_modes) complex ; synthesis : (n_out, n_ref, K) complex
+    """
+    q = FORM_POWER[form]
+    jw = 2j * np.pi * np.asarray(freq_hz, dtype=float)[:, None]
+    s = np.asarray(s, dtype=complex)[None, :]
+    L = np.asarray(L, dtype=complex)
+    n_out, n_ref, K = Y.shape
+    B, Bc = jw**q / (jw - s), jw**q / (jw - np.conj(s))  # (K, m)
+    cols = []
+    for h in range(n_ref):  # rows of reference h: Re ψ and Im ψ columns of every mode
+        c1 = L[:, h][None, :] * B + np.conj(L[:, h])[None, :] * Bc
+        c2 = 1j * (L[:, h][None, :] * B - np.conj(L[:, h])[None, :] * Bc)
+        cols.append(np.concatenate([c1, c2], axis=1))
+    A_modes = np.concatenate(cols, axis=0)  # (n_ref K, 2m)
+    resid = np.zeros((n_ref * K, 2 * n_ref), dtype=complex)
+    for h in range(n_ref):
+        resid[h * K:(h + 1) * K, 2 * h] = jw[:, 0] ** (q - 2)
+        resid[h * K:(h + 1) * K, 2 * h + 1] = jw[:, 0] ** q
+    A = np.concatenate([A_modes, resid], axis=1)
+    Ar = np.concatenate([A.real, A.imag], axis=0)
+    scale = np.linalg.norm(Ar, axis=0)
+    scale[scale == 0] = 1
+    Yc = Y.reshape(n_out, n_ref * K).T  # (n_ref K, n_out)
+    Yr = np.concatenate([Yc.real, Yc.imag], axis=0)
+    x = scipy.linalg.lstsq(Ar / scale, Yr, lapack_driver="gelsy")[0] / scale[:, None]
+    m = s.shape[1]
+    psi = (x[:m] + 1j * x[m:2 * m]).T  # (n_out, m)
+    residues = psi[:, None, :] * L.T[None, :, :]  # (n_out, n_ref, m)
+    synth = (A @ x).T.reshape(n_out, n_ref, K)
+    return residues, synth

@@ -6,7 +6,8 @@ HDF5: root attributes ``format``, ``format_version``, ``tiremodal_version``, ``i
 datasets per mode ``frequency_hz``, ``damping_ratio``, ``pole`` (complex, as estimated,
 rad/s), ``mpc``, ``significance``, ``group``, ``n`` (−1: none), ``n_spatial``,
 ``n_confidence``, ``branch`` (str, "" none), ``branch_confidence``, ``pair`` (−1: none),
-``splitting_hz`` (NaN: none), ``shapes`` (n_modes, n_channels, n_points) complex residues;
+``splitting_hz`` (NaN: none), ``in_order`` (bool: within its branch's dispersion order),
+``shapes`` (n_modes, n_channels, n_points) complex residues;
 geometry ``point_angle``, ``point_index``, ``channel_name``, ``channel_location``,
 ``channel_angle``; ``fit_error`` (n_channels, n_points); the stabilization diagram
 ``diagram`` (n_poles, 5): group, order, frequency_hz, damping_ratio, status code
@@ -35,7 +36,7 @@ FORMAT_NAME = "tiremodal.modal"
 FORMAT_VERSION = 1
 STATUS_CODES = {"new": 0, "f": 1, "fd": 2, "fv": 3, "stable": 4}
 COLUMNS = ("mode", "frequency_hz", "damping_ratio", "n", "branch", "n_confidence", "branch_confidence",
-           "mpc", "significance", "n_spatial", "n_aliased", "pair", "splitting_hz", "group")
+           "mpc", "significance", "n_spatial", "n_aliased", "pair", "splitting_hz", "in_order", "group")
 
 
 @dataclass(frozen=True)
@@ -55,6 +56,7 @@ class ModalTable:
     branch_confidence: np.ndarray
     pair: np.ndarray
     splitting_hz: np.ndarray
+    in_order: np.ndarray
     shapes: np.ndarray
     point_angle: np.ndarray
     point_index: np.ndarray
@@ -91,6 +93,7 @@ def table_from_result(res, classes, *, point_angle, point_index, channel_name, c
         branch_confidence=np.array([c.branch_confidence if c else np.nan for c in cls]),
         pair=np.array([c.pair if c and c.pair is not None else -1 for c in cls]),
         splitting_hz=np.array([c.splitting_hz if c and c.splitting_hz is not None else np.nan for c in cls]),
+        in_order=np.array([c.in_order if c else True for c in cls]),
         shapes=res.shapes, point_angle=np.asarray(point_angle, float), point_index=np.asarray(point_index),
         channel_name=tuple(channel_name), channel_location=tuple(channel_location),
         channel_angle=np.asarray(channel_angle, float), fit_error=res.fit_error,
@@ -109,7 +112,8 @@ def to_rows(t: ModalTable) -> list[dict]:
                        branch_confidence=float(t.branch_confidence[i]), n_spatial=int(t.n_spatial[i]),
                        n_aliased=bool(t.n[i] != t.n_spatial[i]),
                        pair=None if t.pair[i] < 0 else int(t.pair[i]) + 1,
-                       splitting_hz=None if not np.isfinite(t.splitting_hz[i]) else float(t.splitting_hz[i]))
+                       splitting_hz=None if not np.isfinite(t.splitting_hz[i]) else float(t.splitting_hz[i]),
+                       in_order=bool(t.in_order[i]))
         rows.append(row)
     return rows
 
@@ -134,7 +138,7 @@ def write_modal(path, t: ModalTable, *, input_file: str = "", input_sha256: str 
             a["clusters"] = json.dumps(t.clusters or [], default=float)
             a["rejected"] = json.dumps(t.rejected or [], default=float)
             for name in ("frequency_hz", "damping_ratio", "pole", "mpc", "significance", "group", "n", "n_spatial",
-                         "n_confidence", "branch_confidence", "pair", "splitting_hz", "shapes", "point_angle",
+                         "n_confidence", "branch_confidence", "pair", "splitting_hz", "in_order", "shapes", "point_angle",
                          "point_index", "channel_angle", "fit_error", "diagram"):
                 h.create_dataset(name, data=np.asarray(getattr(t, name)))
             for name in ("branch", "channel_name", "channel_location"):
@@ -150,6 +154,7 @@ def read_modal(path) -> ModalTable:
         try:
             d = {k: h[k][()] for k in ("frequency_hz", "damping_ratio", "pole", "mpc", "significance", "group", "n",
                                        "n_spatial", "n_confidence", "branch_confidence", "pair", "splitting_hz",
+                                       "in_order",
                                        "shapes", "point_angle", "point_index", "channel_angle", "fit_error",
                                        "diagram")}
             strs = {k: _strings(h[k]) for k in ("branch", "channel_name", "channel_location")}

@@ -15,8 +15,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from .errors import DataFormatError, ParameterError
-from .lsce import poles_to_modal, principal_responses, sweep
-from .lsfd import lsfd, mpc, significance
+from .lsce import poles_to_modal, principal_responses, sweep, sweep_poly
+from .lsfd import lsfd, lsfd_participation, mpc, significance
 from .spatial import decompose
 from .stabilization import StabilizationOptions, stabilize
 from .windows import correct_poles
@@ -24,6 +24,8 @@ from .windows import correct_poles
 log = logging.getLogger(__name__)
 GROUP_MAX_ORDER = 40  # an order group holds a few modes, plus what models the band edges
 SKIP = 0
+POLY = True
+POLY_ORDER = 20
 
 __all__ = ["ModalOptions", "ModalResult", "estimate_modes", "is_circumferential", "modal_table_from_frf"]
 
@@ -172,10 +174,21 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     synth = np.zeros((n_live * n_p, lines.sum()), dtype=complex)
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
         b = principal_responses(k_lines, rows, None, rtol=opt.rtol_svd)
-        d = stabilize(b, sweep(b, range(2, group_max + 1), skip=SKIP), opt.stabilization)
+        n_h = rows.shape[0] // n_live
+        if spatial and POLY and n_h == 2:
+            # the cos and sin components as two references: split pairs resolve
+            irf = np.fft.ifft(rows.reshape(n_h, n_live, -1).transpose(1, 0, 2), axis=-1)
+            poles = sweep_poly(irf, range(1, POLY_ORDER + 1), b.dt, b.f_lo, b.width_hz)
+        else:
+            poles = sweep(b, range(2, group_max + 1), skip=SKIP)
+        d = stabilize(b, poles, opt.stabilization)
         diagrams.append((g, d))
         s = np.array([c.representative.s for c in d.selected()], dtype=complex)
-        fit, s, rej = _fit_group(k_lines, rows, back, Hflat, s, form, opt, g)
+        parts = [c.representative.participation for c in d.selected()]
+        if s.size and all(pt is not None for pt in parts):
+            fit, s, rej = _fit_group_poly(k_lines, rows, n_h, n_live, back, Hflat, s, np.array(parts), form, opt, g)
+        else:
+            fit, s, rej = _fit_group(k_lines, rows, back, Hflat, s, form, opt, g)
         rejected += rej
         if fit is not None:
             synth += back @ fit.synthesis
@@ -237,6 +250,29 @@ def _fit_group(freq, rows, back, H_phys, s, form, opt, g):
                                    "at its frequency"})
         s = np.delete(s, r)
     return _GroupFit(fit.residues, fit.synthesis, sig), s, rejected
+
+
+def _fit_group_poly(freq, rows, n_h, n_c, back, H_phys, s, L, form, opt, g):
+    """:func:`_fit_group` for a poly-reference group: residues ψ_c L_h (cos/sin as references)."""
+    rejected = []
+    Y = rows.reshape(n_h, n_c, -1).transpose(1, 0, 2)  # (channel, harmonic, K)
+    for _ in range(40):
+        if s.size == 0:
+            return None, s, rejected
+        res3, syn3 = lsfd_participation(freq, Y, s, L, form=form)
+        residues = res3.transpose(1, 0, 2).reshape(n_h * n_c, -1)  # rows harmonic-major
+        synthesis = syn3.transpose(1, 0, 2).reshape(n_h * n_c, -1)
+        sig = np.array([significance(freq, H_phys, back @ residues[:, [k]], s[[k]], form=form)[0]
+                        for k in range(s.size)])
+        weak = np.flatnonzero(sig < opt.min_significance)
+        if weak.size == 0:
+            return _GroupFit(residues, synthesis, sig), s, rejected
+        r = weak[np.argmin(sig[weak])]
+        f_r, z_r = poles_to_modal(s[r])
+        rejected.append({"frequency_hz": float(f_r), "damping_ratio": float(z_r), "group": int(g),
+                         "reason": f"insignificant: explains {100 * sig[r]:.1f} % of the response at its frequency"})
+        s, L = np.delete(s, r), np.delete(L, r, axis=0)
+    return _GroupFit(residues, synthesis, sig), s, rejected
 
 
 def _merge(found, opt):

@@ -46,6 +46,7 @@ class StablePole:
     damping_ratio: float
     shape: np.ndarray  # reduced (principal-space) amplitudes
     status: str  # "stable", "f", "fd", "fv", "new"
+    participation: np.ndarray | None = None  # poly-reference participation factors
 
 
 @dataclass
@@ -137,7 +138,7 @@ def stabilize(band: Band, sweep_result: list[OrderPoles], opt: StabilizationOpti
         cur = []
         for k, i in enumerate(idx):
             sp = StablePole(op.order, complex(op.s[i]), float(op.freq_hz[i]), float(op.damping_ratio[i]),
-                            shapes[k], "new")
+                            shapes[k], "new", None if op.participation is None else op.participation[i])
             if prev:
                 pf = np.array([q.freq_hz for q in prev])
                 j = int(np.argmin(np.abs(pf - sp.freq_hz)))
