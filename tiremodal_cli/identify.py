@@ -143,20 +143,9 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
             skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"n={n!r} is not an integer"})
             continue
         b = str(b).strip().lower()
-        if b not in ("same", "opposite") or n < 0 or not f > 0:
-            skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"branch {b!r} / n {n} not fitted"})
-            continue
-        conf = get("n_confidence")
-        if conf is not None and float(conf) < min_confidence:
-            skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"n_confidence {float(conf):.2f} < {min_confidence}"})
-            continue
-        order_ok = get("in_order")
-        if order_ok is not None and str(order_ok).strip().lower() in ("false", "0"):
-            skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"n={n} {b} out of its branch's dispersion order"})
-            continue
-        mpc = get("mpc")
-        if mpc is not None and float(mpc) < min_mpc:
-            skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"mpc {float(mpc):.2f} < {min_mpc}: not a normal mode"})
+        problem = _row_problem(get, n, b, f, min_confidence, min_mpc)
+        if problem:
+            skipped.append({"row": i + 1, "frequency_hz": f, "reason": problem})
             continue
         z = get("damping_ratio")
         u = get("frequency_uncertainty_hz")
@@ -180,6 +169,20 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
         modes.append(MeasuredMode(n, b, f, float(np.mean(zs)) if zs else None, float(np.mean(us)) if us else None,
                                   source=source if len(vals) == 1 else f"{source} (mean of a split pair)"))
     return modes, skipped
+
+
+def _row_problem(get, n, b, f, min_confidence, min_mpc) -> str | None:
+    """Why a table row cannot enter the fit (None when it can)."""
+    conf, order_ok, mpc = get("n_confidence"), get("in_order"), get("mpc")
+    if b not in ("same", "opposite") or n < 0 or not f > 0:
+        return f"branch {b!r} / n {n} not fitted"
+    if conf is not None and float(conf) < min_confidence:
+        return f"n_confidence {float(conf):.2f} < {min_confidence}"
+    if order_ok is not None and str(order_ok).strip().lower() in ("false", "0"):
+        return f"n={n} {b} out of its branch's dispersion order"
+    if mpc is not None and float(mpc) < min_mpc:
+        return f"mpc {float(mpc):.2f} < {min_mpc}: not a normal mode"
+    return None
 
 
 def model_frequencies(p: TyreParameters, ns, branches, effects=None) -> np.ndarray:
