@@ -137,6 +137,16 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None) 
                     and sig[q] >= sig[r]):
                 in_order[r] = False
                 break
+    # a mode whose branch cannot be read (the co-located tread and sidewall sensors sit at
+    # its node) beside a clear mode of the same n within 5 % is taken as that mode's partner
+    for r in range(len(out)):
+        if out[r][3] >= 0.5:
+            continue
+        partners = [q for q in range(len(out)) if q != r and ns[q] == ns[r] and out[q][3] >= 0.5
+                    and abs(freq_hz[q] - freq_hz[r]) < 0.05 * freq_hz[r]]
+        if len(partners) == 1 and sum(1 for q in range(len(out)) if ns[q] == ns[r]
+                                      and out[q][2] == out[partners[0]][2]) == 1:
+            out[r][2] = out[partners[0]][2]
     # split pairs
     res = []
     pair_id = {}

@@ -25,7 +25,7 @@ log = logging.getLogger(__name__)
 GROUP_MAX_ORDER = 40  # an order group holds a few modes, plus what models the band edges
 SKIP = 0
 POLY = True
-POLY_ORDER = 20
+POLY_ORDER = 30
 
 __all__ = ["ModalOptions", "ModalResult", "estimate_modes", "is_circumferential", "modal_table_from_frf"]
 
@@ -289,6 +289,11 @@ def _merge(found, opt):
     for i in np.argsort(-energy):
         if used[i]:
             continue
+        # one pole found twice in its own group (two clusters): a twin, not a split pair
+        for j in range(len(found)):
+            if (j != i and not used[j] and found[j][1] == found[i][1] and abs(fn[j] - fn[i]) <= 5e-4 * fn[i]
+                    and abs(zeta[j] - zeta[i]) <= 0.05 * zeta[i]):
+                used[j] = True
         same = [j for j in range(len(found)) if not used[j] and found[j][1] != found[i][1] or j == i]
         same = [j for j in same if abs(fn[j] - fn[i]) <= 2e-3 * fn[i] and abs(zeta[j] - zeta[i]) <= 0.2 * zeta[i]]
         groups_seen = {}

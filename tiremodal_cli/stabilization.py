@@ -134,7 +134,9 @@ def stabilize(band: Band, sweep_result: list[OrderPoles], opt: StabilizationOpti
     poles, prev = [], None
     for op in sweep_result:
         idx = _candidates(op, band, opt.zeta_max)
-        shapes = _shapes(band, op.s[idx])
+        # poly-reference poles carry participation vectors: those tell the members of a
+        # split pair apart where a shape fitted per order would mix them
+        shapes = op.participation[idx] if op.participation is not None else _shapes(band, op.s[idx])
         cur = []
         for k, i in enumerate(idx):
             sp = StablePole(op.order, complex(op.s[i]), float(op.freq_hz[i]), float(op.damping_ratio[i]),
