@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.optimize
 
+from .effects import get_effect
 from .errors import DataFormatError, ParameterError
 from .model import TyreParameters, closed_form_hz, solve_modes
 
@@ -47,6 +48,7 @@ class MeasuredMode:
     damping_ratio: float | None = None
     uncertainty_hz: float | None = None
     source: str = ""
+    member: str | None = None  # "lower"/"upper" member of a split pair kept apart (diagnose)
 
 
 @dataclass(frozen=True)
@@ -66,6 +68,10 @@ class FitOptions:
     effect_free : [(effect, param)] effect parameters fitted too (``diagnose``)
     error_floor : relative frequency uncertainty below which the residual variance is not
         taken for the standard errors (0.1 %: an impact test's frequencies)
+    tol : relative convergence tolerance of the population's objective spread (DE's
+        ``tol``); the default runs every generation, ``diagnose`` stops earlier
+    start : {name: value} a known good point put into the initial population (DE's
+        ``x0``; names as in ``free``/``"effect.param"``, missing ones at mid-range)
     """
 
     free: tuple[str, ...] = ("k_r1", "k_r2", "EI")
@@ -79,6 +85,8 @@ class FitOptions:
     effects: dict = field(default_factory=dict)
     effect_free: tuple = ()
     error_floor: float = 1e-3
+    tol: float = 1e-10
+    start: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -112,7 +120,7 @@ class FitResult:
 
 
 def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
-                    source: str = "") -> tuple[list[MeasuredMode], list[dict]]:
+                    source: str = "", split_pairs: str = "mean") -> tuple[list[MeasuredMode], list[dict]]:
     """Measured modes usable for a fit, from table rows (``lsce`` JSON/CSV or a Table A1 CSV).
 
     Matching rules (docs/identify.md): a row needs ``frequency_hz`` > 0, an integer ``n`` ≥ 0
@@ -120,8 +128,11 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
     are left out, and so are rows with ``mpc`` below ``min_mpc`` (not a normal mode) and rows
     flagged out of their branch's dispersion order (``in_order`` false, from lsce); the two
     members of a split pair (one n and branch twice, within 5 %) enter as their mean
-    frequency; of one n and branch twice farther apart, the more significant row stays.
-    Returns the modes and the rows left out with their reasons.
+    frequency (``split_pairs="mean"``) or as two modes marked ``member`` "lower" and
+    "upper" (``split_pairs="members"``, for ``diagnose``); of one n and branch twice
+    farther apart, the more significant row stays.
+    Returns the modes and the rows left out with their reasons (each with its ``row``
+    number, ``frequency_hz``, and ``n``/``branch`` where the row has them).
     """
     kept, skipped = {}, []
     for i, r in enumerate(rows):
@@ -145,7 +156,7 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
         b = str(b).strip().lower()
         problem = _row_problem(get, n, b, f, min_confidence, min_mpc)
         if problem:
-            skipped.append({"row": i + 1, "frequency_hz": f, "reason": problem})
+            skipped.append({"row": i + 1, "frequency_hz": f, "n": n, "branch": b, "reason": problem})
             continue
         z = get("damping_ratio")
         u = get("frequency_uncertainty_hz")
@@ -160,9 +171,14 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
             vals.sort(key=lambda v: -v[3])
             far = [v for v in vals[1:] if abs(v[0] / vals[0][0] - 1) > 0.05]
             for v in far:
-                skipped.append({"row": v[4], "frequency_hz": v[0],
+                skipped.append({"row": v[4], "frequency_hz": v[0], "n": n, "branch": b,
                                 "reason": f"n={n} {b} already at {vals[0][0]:.2f} Hz (not a split pair: > 5 % apart)"})
             vals = [v for v in vals if v not in far]
+        if split_pairs == "members" and len(vals) == 2:
+            for v, member in zip(sorted(vals, key=lambda v: v[0]), ("lower", "upper")):
+                modes.append(MeasuredMode(n, b, v[0], v[1], v[2], source=f"{source} ({member} member of a split pair)",
+                                          member=member))
+            continue
         f = float(np.mean([v[0] for v in vals]))
         zs = [v[1] for v in vals if v[1] is not None]
         us = [v[2] for v in vals if v[2] is not None]
@@ -185,38 +201,69 @@ def _row_problem(get, n, b, f, min_confidence, min_mpc) -> str | None:
     return None
 
 
-def model_frequencies(p: TyreParameters, ns, branches, effects=None) -> np.ndarray:
+def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=None) -> np.ndarray:
     """Model frequencies (Hz) of the given (n, branch) pairs.
 
+    Parameters
+    ----------
+    p : TyreParameters
+    ns : (k,) array of int
+    branches : (k,) sequence of {"same", "opposite", "cavity"}
+    effects : mapping ``{name: {param: value}}`` or resolved effects, optional
+    members : (k,) sequence of {None, "lower", "upper"}, optional
+        Which member of a cos/sin pair a measured mode is. Only a coupling effect (a
+        lumped mass) splits the pairs; then "lower"/"upper" take that member and None
+        the pair's mean (an unresolved pair). Without one both members are one frequency.
+
+    Returns
+    -------
+    freq_hz : (k,) ndarray — NaN where the model has no such mode.
+
     The seed model uses the closed form (and the 3 × 3 problem for n = 1 with a rim);
-    with effects, the general block solver.
+    block effects the stacked solver :func:`tiremodal_cli.model.branch_frequencies`;
+    coupling effects the assembled problem of :func:`tiremodal_cli.model.solve_modes`.
     """
+    from .effects import resolve_effects
+    from .model import branch_frequencies
+
     ns = np.asarray(ns, dtype=int)
     br = np.asarray(branches)
+    eff = resolve_effects(effects) if (effects is None or isinstance(effects, dict)) else tuple(effects)
     out = np.full(ns.size, np.nan)
-    if not effects:
+    cavity = br == "cavity"
+    if not eff:
         cf = closed_form_hz(ns, p)
         col = (br == "opposite").astype(int)
-        out = cf[np.arange(ns.size), col]
+        out = np.where(cavity, np.nan, cf[np.arange(ns.size), col])
         if p.m_w is not None and np.any(ns == 1):
             m = solve_modes(p, n_max=1)
-            for i in np.flatnonzero(ns == 1):
+            for i in np.flatnonzero((ns == 1) & ~cavity):
                 sel = (m.n == 1) & (np.array(m.branch) == br[i]) & (np.array(m.harmonic) == "cos")
                 out[i] = m.freq_hz[sel][0] if sel.any() else np.nan
         return out
-    m = solve_modes(p, n_max=max(2, int(ns.max())), effects=effects)
+    if not any(e.couple is not None for e, _ in eff):
+        bf = branch_frequencies(ns, p, eff)
+        out = np.where(br == "opposite", bf[:, 1], bf[:, 0])
+        if cavity.any():
+            m = solve_modes(p, n_max=1, effects=eff)
+            fc = m.freq_hz[np.array(m.branch) == "cavity"]
+            out[cavity] = fc.min() if fc.size else np.nan
+        return out
+    m = solve_modes(p, n_max=max(2, int(ns.max())), effects=eff)
     mb = np.array(m.branch)
+    mem = [None] * ns.size if members is None else list(members)
     for i, (n, b) in enumerate(zip(ns, br)):
-        sel = (m.n == n) & (mb == b)
-        if sel.any():
-            out[i] = m.freq_hz[sel].min()
+        f = np.sort(m.freq_hz[(m.n == n) & (mb == b)])
+        if f.size == 0:
+            continue
+        pair = f[:2] if b != "cavity" else f[:1]
+        out[i] = pair[0] if mem[i] == "lower" else pair[-1] if mem[i] == "upper" else pair.mean()
     return out
 
 
 def _split_free(opt: FitOptions):
     names = list(opt.free) + [f"{e}.{k}" for e, k in opt.effect_free]
     bounds = []
-    from .effects import get_effect
 
     for name in opt.free:
         if name not in DEFAULT_BOUNDS:
@@ -240,7 +287,9 @@ def _apply(base: TyreParameters, opt: FitOptions, names, logx):
     for n, v in zip(names, vals):
         if "." in n:
             e, k = n.split(".", 1)
-            eff.setdefault(e, {})[k] = float(v)
+            par = {q.name: q for q in get_effect(e).parameters}[k]
+            # a finite-difference step may cross a physical limit by a rounding: clip to it
+            eff.setdefault(e, {})[k] = float(np.clip(v, par.lower, par.upper))
     return dataclasses.replace(base, **p_changes), eff
 
 
@@ -262,6 +311,7 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
         base = dataclasses.replace(base, m_w=1000.0)
     ns = np.array([m.n for m in modes])
     br = np.array([m.branch for m in modes])
+    mem = [m.member for m in modes]
     f_meas = np.array([m.frequency_hz for m in modes])
     if opt.weights == "uncertainty":
         # σ_f: the given uncertainty, else a fifth of the half-power half-bandwidth ζ f
@@ -274,7 +324,7 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
 
     def residuals(logx):
         p, eff = _apply(base, opt, names, logx)
-        f = model_frequencies(p, ns, br, eff or None)
+        f = model_frequencies(p, ns, br, eff or None, mem)
         r = (f - f_meas) / f_meas
         return np.where(np.isfinite(r), r, 10.0) * w
 
@@ -289,11 +339,16 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
             progress(len(history), opt.generations)
 
     k = len(names)
+    x0 = None
+    if opt.start:
+        mid = logb.mean(axis=1)
+        x0 = np.array([np.log(opt.start[n]) if opt.start.get(n, 0) > 0 else mid[i] for i, n in enumerate(names)])
+        x0 = np.clip(x0, logb[:, 0] + 1e-9, logb[:, 1] - 1e-9)
     de = scipy.optimize.differential_evolution(
         objective, bounds=list(map(tuple, logb)), popsize=max(1, math.ceil(opt.population / k)),
         maxiter=opt.generations, recombination=opt.crossover,
-        mutation=tuple(opt.mutation) if isinstance(opt.mutation, (tuple, list)) else opt.mutation, seed=opt.seed, tol=1e-10,
-        atol=0, polish=False, updating="deferred", workers=1, callback=callback, init="latinhypercube")
+        mutation=tuple(opt.mutation) if isinstance(opt.mutation, (tuple, list)) else opt.mutation, seed=opt.seed, tol=opt.tol,
+        atol=0, polish=False, updating="deferred", workers=1, callback=callback, init="latinhypercube", x0=x0)
     ls = scipy.optimize.least_squares(residuals, de.x, bounds=(logb[:, 0], logb[:, 1]), x_scale=1.0,
                                       xtol=1e-14, ftol=1e-14, gtol=1e-14)
     x = ls.x if objective(ls.x) <= de.fun else de.x
@@ -322,10 +377,11 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
         elif at_bound:
             undetermined[name] = "at a bound of the search"
     p, eff = _apply(base, opt, names, x)
-    f_mod = model_frequencies(p, ns, br, eff or None)
+    f_mod = model_frequencies(p, ns, br, eff or None, mem)
     err = 100 * (f_mod - f_meas) / f_meas
     table = [{"n": int(m.n), "branch": m.branch, "measured_hz": m.frequency_hz, "model_hz": float(fm),
-              "error_pct": float(e)} for m, fm, e in zip(modes, f_mod, err)]
+              "error_pct": float(e), **({"member": m.member} if m.member else {})}
+             for m, fm, e in zip(modes, f_mod, err)]
     return FitResult(parameters=p, effects=eff, free=tuple(names), values=vals, std_errors=se, correlation=corr,
                      undetermined=undetermined, modes=table, rms_error_pct=float(np.sqrt(np.mean(err**2))),
                      max_error_pct=float(np.max(np.abs(err))), history=history, jacobian=J, covariance_log=cov,

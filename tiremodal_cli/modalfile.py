@@ -36,7 +36,8 @@ FORMAT_NAME = "tiremodal.modal"
 FORMAT_VERSION = 1
 STATUS_CODES = {"new": 0, "f": 1, "fd": 2, "fv": 3, "stable": 4}
 COLUMNS = ("mode", "frequency_hz", "damping_ratio", "n", "branch", "n_confidence", "branch_confidence",
-           "mpc", "significance", "n_spatial", "n_aliased", "pair", "splitting_hz", "in_order", "group")
+           "mpc", "significance", "n_spatial", "n_aliased", "pair", "splitting_hz", "in_order", "group",
+           "frequency_uncertainty_hz")
 
 
 @dataclass(frozen=True)
@@ -101,12 +102,28 @@ def table_from_result(res, classes, *, point_angle, point_index, channel_name, c
         rejected=res.rejected)
 
 
+def frequency_uncertainty(t: ModalTable) -> np.ndarray:
+    """Each mode's frequency scatter (Hz): the standard deviation of its cluster's poles
+    over the model orders of the stabilization diagram (the adopted cluster of its group
+    nearest in frequency, within 1 %). NaN where none matches (an old file)."""
+    out = np.full(t.n_modes, np.nan)
+    adopted = [c for c in (t.clusters or []) if c.get("adopted") and "frequency_std_hz" in c]
+    for i in range(t.n_modes):
+        near = [c for c in adopted if c.get("group") == int(t.group[i])
+                and abs(c["frequency_hz"] - t.frequency_hz[i]) <= 0.01 * t.frequency_hz[i]]
+        if near:
+            out[i] = min(near, key=lambda c: abs(c["frequency_hz"] - t.frequency_hz[i]))["frequency_std_hz"]
+    return out
+
+
 def to_rows(t: ModalTable) -> list[dict]:
     """One dict per mode (the ``--json`` list; n, branch, pair absent when not a tyre)."""
     rows = []
+    unc = frequency_uncertainty(t)
     for i in range(t.n_modes):
         row = {"mode": i + 1, "frequency_hz": float(t.frequency_hz[i]), "damping_ratio": float(t.damping_ratio[i]),
-               "mpc": float(t.mpc[i]), "significance": float(t.significance[i]), "group": int(t.group[i])}
+               "mpc": float(t.mpc[i]), "significance": float(t.significance[i]), "group": int(t.group[i]),
+               "frequency_uncertainty_hz": None if not np.isfinite(unc[i]) else float(unc[i])}
         if t.n[i] >= 0:
             row.update(n=int(t.n[i]), branch=t.branch[i] or None, n_confidence=float(t.n_confidence[i]),
                        branch_confidence=float(t.branch_confidence[i]), n_spatial=int(t.n_spatial[i]),

@@ -200,6 +200,10 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     if not found:
         raise DataFormatError("no stable mode found in the band; widen the band or raise --max-order")
     modes = _merge(found, opt)
+    modes, edge = _off_edges(modes, k_lines[0], k_lines[-1], exp_tau_s)
+    rejected += edge
+    if not modes:
+        raise DataFormatError("no stable mode found inside the band; widen the band or raise --max-order")
     s = np.array([m[0] for m in modes])
     shapes = np.full((s.size, H.shape[0], n_p), np.nan + 0j)
     shapes[:, live] = np.array([m[2] for m in modes]).reshape(s.size, n_live, n_p)
@@ -273,6 +277,27 @@ def _fit_group_poly(freq, rows, n_h, n_c, back, H_phys, s, L, form, opt, g):
                          "reason": f"insignificant: explains {100 * sig[r]:.1f} % of the response at its frequency"})
         s, L = np.delete(s, r), np.delete(L, r, axis=0)
     return _GroupFit(residues, synthesis, sig), s, rejected
+
+
+def _off_edges(modes, f_lo, f_hi, exp_tau_s):
+    """Drop modes whose half-power band (f ± ζ f) reaches past an edge of the analysis band.
+
+    Such a pole is fitted to one flank of a peak, usually a mode just outside the band
+    leaking in (seen: the 308 Hz mode of a 40–300 Hz band returned at 299.5 Hz with a
+    third of its damping); its frequency cannot be trusted. The lowest band line of a
+    band starting at 0 Hz is no edge.
+    """
+    kept, rejected = [], []
+    f, z = poles_to_modal(correct_poles(np.array([m[0] for m in modes]), exp_tau_s))
+    for m, fi, zi in zip(modes, f, z):
+        hw = zi * fi
+        if fi + hw > f_hi or (f_lo > 0 and fi - hw < f_lo):
+            rejected.append({"frequency_hz": float(fi), "damping_ratio": float(zi), "group": int(m[1]),
+                             "reason": f"at the band edge: its half-power band {fi - hw:.1f}–{fi + hw:.1f} Hz "
+                                       f"crosses the analysis band {f_lo:.1f}–{f_hi:.1f} Hz"})
+        else:
+            kept.append(m)
+    return kept, rejected
 
 
 def _merge(found, opt):

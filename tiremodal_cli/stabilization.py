@@ -81,6 +81,7 @@ class Cluster:
         return {"frequency_hz": self.freq_hz, "damping_ratio": self.damping_ratio,
                 "n_poles": len(self.members), "orders": [m.order for m in self.members],
                 "frequency_spread_pct": float(100 * (f.max() - f.min()) / np.median(f)),
+                "frequency_std_hz": float(np.std(f, ddof=1)) if f.size > 1 else 0.0,
                 "damping_spread_pct": float(100 * (z.max() - z.min()) / max(np.median(z), 1e-12)),
                 "adopted": self.adopted, "reason": self.reason,
                 "representative_order": None if self.representative is None else self.representative.order}

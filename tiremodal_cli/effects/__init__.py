@@ -7,9 +7,13 @@ built by scanning this package, so a new module is found without being listed an
 
 An effect acts through one or more of three hooks:
 
-``modify_block(n, block, values, freq_hz)``
+``modify_block(n, block, values, p, freq_hz)``
     Change the per-length block of circumferential order ``n`` (mass, stiffness,
-    degrees of freedom). ``freq_hz`` is given for frequency-dependent effects.
+    degrees of freedom). ``freq_hz`` is given for frequency-dependent effects. The hook
+    must also take a stack: ``n`` a (k,) int array, ``block.M``/``block.K`` (k, d, d)
+    arrays and ``freq_hz`` None or a (k,) array (index with ``K[..., i, j]``); a block
+    of n = 1 always comes alone, so an effect that adds a degree of freedom there
+    (the air cavity) leaves stacks of other orders as they are.
 ``couple(M, K, dofs, values)``
     Add terms that couple different orders or harmonics (a lumped mass), acting on the
     assembled generalised matrices (kg, N/m).
@@ -37,6 +41,9 @@ class Param:
     upper: float
     unit: str
     doc: str
+    #: the upper bound is a physical limit (a fraction that cannot exceed 1), not a search
+    #: limit: a fit may rest on it
+    upper_is_physical: bool = False
 
 
 @dataclass(frozen=True)
@@ -71,6 +78,15 @@ class Effect:
     kind: str = "structural"  # "structural", "acoustic" or "coupling"
     reference: str = ""
     extra: dict = field(default_factory=dict)
+    #: the parameters ``diagnose`` fits (default: all); the others stay at
+    #: ``diagnose_fixed`` (default: their defaults) because the data cannot see them
+    diagnose_free: tuple[str, ...] | None = None
+    diagnose_fixed: dict = field(default_factory=dict)
+
+    def fitted_parameters(self) -> tuple[Param, ...]:
+        """The parameters a diagnosis fits."""
+        names = self.diagnose_free or tuple(p.name for p in self.parameters)
+        return tuple(p for p in self.parameters if p.name in names)
 
     def defaults(self) -> dict[str, float]:
         return {p.name: p.default for p in self.parameters}

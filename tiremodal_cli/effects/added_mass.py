@@ -36,4 +36,5 @@ EFFECT = Effect(
     couple=_couple,
     kind="coupling",
     reference="Allaei, Soedel & Yang 1986",
+    diagnose_free=("m_a",),  # the frequencies do not depend on where the mass sits
 )

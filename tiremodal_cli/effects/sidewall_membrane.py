@@ -21,7 +21,7 @@ from . import Block, Effect, Param
 def _modify(n, block: Block, v, p, freq_hz=None) -> Block:
     K = np.array(block.K, dtype=float)
     i = block.dofs.index("S")
-    K[i, i] += v["T_s"] * n**2 / p.R**2
+    K[..., i, i] += v["T_s"] * np.asarray(n, dtype=float) ** 2 / p.R**2
     return Block(block.M, K, block.dofs)
 
 

@@ -22,13 +22,13 @@ from . import Block, Effect, Param
 
 
 def _modify(n, block: Block, v, p, freq_hz=None) -> Block:
-    if n == 0:
-        return block
+    n = np.asarray(n, dtype=float)
+    inv_n2 = np.divide(1.0, n**2, out=np.zeros_like(n), where=n > 0)  # n = 0 unchanged
     M = np.array(block.M, dtype=float)
     K = np.array(block.K, dtype=float)
     i = block.dofs.index("U")
-    M[i, i] += p.rhoA * v["c_t"] / n**2
-    K[i, i] += v["k_t"] / n**2
+    M[..., i, i] += p.rhoA * v["c_t"] * inv_n2
+    K[..., i, i] += v["k_t"] * inv_n2
     return Block(M, K, block.dofs)
 
 
@@ -36,7 +36,7 @@ EFFECT = Effect(
     name="tangential",
     title="tangential inertia and stiffness of an inextensible tread ∝ 1/n²",
     parameters=(Param("c_t", 1.0, 0.0, 1.0, "1",
-                      "participating fraction of the tangential inertia ρA/n²"),
+                      "participating fraction of the tangential inertia ρA/n²", upper_is_physical=True),
                 Param("k_t", 2.0e6, 0.0, 5.0e7, "N/m²",
                       "tangential sidewall stiffness per length (enters as k_t/n²)")),
     signature="strongest at n = 1, 2, decaying as 1/n²; both branches",

@@ -23,19 +23,19 @@ F_REF_HZ = 100.0
 def _modify(n, block: Block, v, p, freq_hz=None) -> Block:
     if freq_hz is None or v["beta"] == 0.0:
         return block
-    scale = (max(freq_hz, 1e-3) / F_REF_HZ) ** v["beta"] - 1.0
+    scale = (np.maximum(freq_hz, 1e-3) / F_REF_HZ) ** v["beta"] - 1.0
     K = np.array(block.K, dtype=float)
     iu, is_ = block.dofs.index("U"), block.dofs.index("S")
     d1, d2 = p.k_r1 * scale, p.k_r2 * scale
-    K[iu, iu] += d1
-    K[iu, is_] -= d1
-    K[is_, iu] -= d1
-    K[is_, is_] += d1 + d2
+    K[..., iu, iu] += d1
+    K[..., iu, is_] -= d1
+    K[..., is_, iu] -= d1
+    K[..., is_, is_] += d1 + d2
     if "W" in block.dofs:
         iw = block.dofs.index("W")
-        K[is_, iw] -= d2
-        K[iw, is_] -= d2
-        K[iw, iw] += d2
+        K[..., is_, iw] -= d2
+        K[..., iw, is_] -= d2
+        K[..., iw, iw] += d2
     return Block(block.M, K, block.dofs)
 
 

@@ -1,0 +1,656 @@
+"""Close the loop: the residual of a fit, the physics that explains it, the model with it.
+
+After the base fit (:func:`tiremodal_cli.identify.fit`) the residual of every measured
+mode is compared with its uncertainty; if it exceeds the noise, every candidate of
+:mod:`tiremodal_cli.effects` (and every nominal parameter that may be off) is fitted in
+turn on top of the current model and scored. A candidate is adopted only when
+
+1. the current residual exceeds the noise (χ² test at level ``alpha``),
+2. it improves the fit beyond what its extra parameters buy by chance (nested F-test at
+   level ``alpha``, and a lower AICc),
+3. its parameter is significant (|value / standard error| ≥ ``min_t``) and physically
+   plausible (inside its bounds, not pinned to a search limit), and
+4. it has its own evidence where it needs some: split pairs for a lumped mass, an
+   unexplained n = 1 mode in the cavity band for the air cavity.
+
+The best adopted candidate (lowest AICc) is added, and a second one is tried on top when
+the residual still exceeds the noise. "No effect needed" and "a residual remains that no
+candidate explains" are normal outcomes, reported with the residual's pattern.
+
+Noise: each mode's relative frequency uncertainty is its ``frequency_uncertainty_hz``
+where the table has one, never below a stated floor (``noise_floor_pct``, default
+0.1 %: the repeatability of an impact test's frequencies).
+
+References
+----------
+Burnham & Anderson (2002), *Model Selection and Multimodel Inference* (AICc).
+Seber & Wild (1989), *Nonlinear Regression*, §5.3 (extra-sum-of-squares F-test).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.stats
+
+from .effects import EFFECTS, get_effect
+from .errors import DataFormatError, ParameterError
+from .identify import DEFAULT_BOUNDS, FitOptions, FitResult, MeasuredMode, fit, modes_from_rows, predict_table
+from .model import TyreParameters
+
+__all__ = ["DiagnoseOptions", "Candidate", "Diagnosis", "residual_analysis", "diagnose", "PARAMETER_CANDIDATES",
+           "cavity_band_hz"]
+
+#: Nominal values that may be off: freed one at a time ("a parameter value is off").
+PARAMETER_CANDIDATES = ("rhoA", "m_s", "m_w", "b")
+
+
+@dataclass(frozen=True)
+class DiagnoseOptions:
+    """How to diagnose (fractions, not per cent, unless the name says so).
+
+    free : parameters of the base fit (and of every candidate's refit)
+    noise_floor_pct : floor of each mode's relative frequency uncertainty, %
+    alpha : level of the residual χ² test and of the candidates' F-tests
+    min_t : smallest |value / standard error| of an adopted effect's parameter
+    max_effects : effects adopted on top of one another at most
+    candidates : names of the candidates to try (default: every effect and parameter)
+    seed, population, generations, tol : the evolutionary search of every fit
+    speed_of_sound : m/s, for the cavity band c / (2π r_c)
+    cavity_radius : (lo, hi) fractions of the tread radius R the cavity's mean radius
+        may take (default 0.4 … 1.0)
+    """
+
+    free: tuple[str, ...] = ("k_r1", "k_r2", "EI")
+    noise_floor_pct: float = 0.1
+    alpha: float = 0.01
+    min_t: float = 3.0
+    max_effects: int = 2
+    candidates: tuple[str, ...] | None = None
+    seed: int = 0
+    population: int = 24
+    generations: int = 120
+    tol: float = 1e-6
+    speed_of_sound: float = 343.0
+    cavity_radius: tuple[float, float] = (0.4, 1.0)
+
+    def check(self, base: TyreParameters) -> None:
+        if not 0 < self.noise_floor_pct < 100:
+            raise ParameterError(f"noise_floor_pct={self.noise_floor_pct} must be in (0, 100) %")
+        if not 0 < self.alpha < 0.5:
+            raise ParameterError(f"alpha={self.alpha} must be in (0, 0.5)")
+        if self.max_effects < 0:
+            raise ParameterError(f"max_effects={self.max_effects} must be ≥ 0")
+        lo, hi = self.cavity_radius
+        if not 0 < lo < hi:
+            raise ParameterError(f"cavity_radius={self.cavity_radius} must be 0 < lo < hi (fractions of R)")
+        known = set(EFFECTS) | set(PARAMETER_CANDIDATES)
+        for c in self.candidates or ():
+            if c not in known:
+                raise ParameterError(f"unknown candidate {c!r}; allowed: {', '.join(sorted(known))}")
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One candidate tried on top of a model, with its score and verdict.
+
+    name, kind : effect name or parameter; "structural", "coupling", "acoustic" or "parameter"
+    round : 1 for the first effect, 2 for one on top of it
+    parameters : {name: {"value", "std_error", "t"}} its fitted parameters
+    rms_error_pct, aicc, delta_aicc : the refit's RMS error and AICc, and AICc − the current model's
+    f_p_value : nested F-test p-value against the current model
+    adopted : bool ; reason : why adopted or rejected
+    fit : the refit (None when it had no evidence to fit)
+    """
+
+    name: str
+    kind: str
+    title: str
+    round: int
+    parameters: dict
+    rms_error_pct: float | None
+    aicc: float | None
+    delta_aicc: float | None
+    f_p_value: float | None
+    adopted: bool
+    reason: str
+    signature: str
+    fit: FitResult | None = field(default=None, repr=False)
+    cavity_mode: dict | None = None
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """What :func:`diagnose` found (see :func:`tiremodal_cli.cli.diagnose.report` for its JSON)."""
+
+    base: FitResult
+    augmented: FitResult
+    adopted: tuple[str, ...]
+    candidates: tuple[Candidate, ...]
+    residual_before: dict
+    residual_after: dict
+    unexplained: tuple[dict, ...]
+    cavity_modes: tuple[dict, ...]
+    relabelled: tuple[dict, ...]
+    skipped_rows: tuple[dict, ...]
+    verdict: str
+    options: DiagnoseOptions
+
+
+def cavity_band_hz(R: float, opt: DiagnoseOptions) -> tuple[float, float]:
+    """Frequencies c / (2π r_c) of a cavity whose mean radius is ``cavity_radius`` × R."""
+    lo, hi = opt.cavity_radius
+    return opt.speed_of_sound / (2 * np.pi * hi * R), opt.speed_of_sound / (2 * np.pi * lo * R)
+
+
+def _with_sigma(modes, opt) -> list[MeasuredMode]:
+    """Each mode's frequency uncertainty: its estimate's scatter (``uncertainty_hz``, from
+    lsce's stabilization) and the floor combined in quadrature, in Hz."""
+    floor = opt.noise_floor_pct / 100
+    return [dataclasses.replace(m, uncertainty_hz=m.frequency_hz * math.hypot(floor, (m.uncertainty_hz or 0.0)
+                                                                              / m.frequency_hz)) for m in modes]
+
+
+def _sigma_rel(modes) -> np.ndarray:
+    return np.array([m.uncertainty_hz / m.frequency_hz for m in modes])
+
+
+def residual_analysis(res: FitResult, modes: list[MeasuredMode], opt: DiagnoseOptions, *, n_extra: int = 0) -> dict:
+    """The residual of a fit against the noise, and its pattern.
+
+    Returns a dict: per-mode ``z`` (error / σ), ``chi2``, ``dof``, ``p_value`` and
+    ``exceeds_noise`` (χ² test at level ``alpha``), and ``pattern``: per branch the trend
+    of the error with n (slope %/order and its t), the number of sign changes along n,
+    isolated outliers (|z| > 3 and > 4 robust deviations from the branch's median), split
+    pairs (one (n, branch) measured twice), and a list of plain-language ``findings``.
+    """
+    err = np.array([m["error_pct"] for m in res.modes])
+    sig = 100 * _sigma_rel(modes)
+    z = err / sig
+    k = len(res.free)
+    dof = max(len(modes) - k, 1)
+    chi2 = float(np.sum(z**2))
+    p = float(scipy.stats.chi2.sf(chi2, dof))
+    ns = np.array([m.n for m in modes])
+    br = np.array([m.branch for m in modes])
+    pattern = {"branches": {}, "outliers": [], "split_pairs": [], "findings": []}
+    for b in ("same", "opposite"):
+        sel = np.flatnonzero(br == b)
+        if sel.size == 0:
+            continue
+        order = sel[np.argsort(ns[sel], kind="stable")]
+        e = err[order]
+        signs = np.sign(e[np.abs(e) > 1e-12])
+        entry = {"modes": int(sel.size), "mean_error_pct": float(e.mean()),
+                 "sign_changes": int(np.sum(signs[1:] != signs[:-1])) if signs.size > 1 else 0}
+        if np.unique(ns[order]).size >= 3:
+            x = ns[order].astype(float)
+            A = np.column_stack([np.ones_like(x), x])
+            coef, *_ = np.linalg.lstsq(A, e, rcond=None)
+            r = e - A @ coef
+            s2 = max(float(r @ r) / max(x.size - 2, 1), float(np.mean(sig[order] ** 2)) / 4)
+            se = math.sqrt(s2 / float(np.sum((x - x.mean()) ** 2)))
+            entry.update(slope_pct_per_order=float(coef[1]), slope_t=float(coef[1] / se))
+        pattern["branches"][b] = entry
+        med = np.median(e)
+        mad = 1.4826 * np.median(np.abs(e - med)) if e.size >= 4 else np.inf
+        for i in order:
+            if abs(z[i]) > 3 and abs(err[i] - med) > 4 * max(mad, 1e-9):
+                pattern["outliers"].append({"n": int(ns[i]), "branch": b, "error_pct": float(err[i]),
+                                            "z": float(z[i])})
+    pairs = {}
+    for m in modes:
+        if m.member:
+            pairs.setdefault((m.n, m.branch), []).append(m.frequency_hz)
+    pattern["split_pairs"] = [{"n": n, "branch": b, "frequencies_hz": sorted(f),
+                               "splitting_pct": float(100 * (max(f) - min(f)) / np.mean(f))}
+                              for (n, b), f in sorted(pairs.items())]
+    pattern["findings"] = _findings(pattern, chi2, dof, p, opt, n_extra)
+    return {"modes": [{**m, "sigma_pct": float(s), "z": float(zz)} for m, s, zz in zip(res.modes, sig, z)],
+            "chi2": chi2, "dof": dof, "p_value": p, "exceeds_noise": bool(p < opt.alpha),
+            "rms_error_pct": res.rms_error_pct, "max_error_pct": res.max_error_pct,
+            "noise_floor_pct": opt.noise_floor_pct, "pattern": pattern}
+
+
+def _findings(pattern, chi2, dof, p, opt, n_extra) -> list[str]:
+    out = []
+    if p < opt.alpha:
+        out.append(f"the residual exceeds the noise: χ² = {chi2:.1f} on {dof} degrees of freedom (p = {p:.2g})")
+    else:
+        out.append(f"the residual is at the level of the noise: χ² = {chi2:.1f} on {dof} degrees of freedom "
+                   f"(p = {p:.2g})")
+    for b, e in pattern["branches"].items():
+        t = e.get("slope_t")
+        if t is not None and abs(t) >= 3:
+            word = "over" if e["slope_pct_per_order"] > 0 else "under"
+            out.append(f"{b} branch {word}-predicted increasingly with n ({e['slope_pct_per_order']:+.3f} %/order, "
+                       f"t = {t:.1f})")
+        if e["sign_changes"] >= 2 and e["modes"] >= 4:
+            out.append(f"{b} branch error changes sign {e['sign_changes']} times along n")
+    for o in pattern["outliers"]:
+        out.append(f"isolated outlier: n = {o['n']} {o['branch']} ({o['error_pct']:+.2f} %, z = {o['z']:.1f})")
+    if pattern["split_pairs"]:
+        out.append(f"{len(pattern['split_pairs'])} split pair(s): "
+                   + ", ".join(f"n = {s['n']} {s['branch']} ({s['splitting_pct']:.2f} %)" for s in pattern["split_pairs"]))
+    if n_extra:
+        out.append(f"{n_extra} measured mode(s) fit no structural (n, branch)")
+    return out
+
+
+def _aicc(rss: float, n: int, k: int) -> float:
+    rss = max(rss, 1e-300)
+    corr = 2 * k * (k + 1) / (n - k - 1) if n - k - 1 > 0 else np.inf
+    return n * math.log(rss / n) + 2 * k + corr
+
+
+def _rss(res: FitResult, modes) -> float:
+    """Σ (error / σ)² over ``modes`` (the first len(modes) rows of the fit's table)."""
+    e = np.array([m["error_pct"] for m in res.modes[:len(modes)]]) / 100 / _sigma_rel(modes)
+    return float(e @ e)
+
+
+def _f_test(rss0, k0, rss1, k1, n) -> float:
+    dk, dof1 = k1 - k0, n - k1
+    if dk <= 0 or dof1 <= 0:
+        return 1.0
+    if rss1 <= 0:
+        return 0.0
+    F = max((rss0 - rss1) / dk, 0.0) / (rss1 / dof1)
+    return float(scipy.stats.f.sf(F, dk, dof1))
+
+
+def _start(current: FitResult) -> dict:
+    """The current optimum as a start of the next search (DE's x0)."""
+    out = {k: float(getattr(current.parameters, k)) for k in ("k_r1", "k_r2", "EI", "rhoA", "m_s", "b")}
+    if current.parameters.m_w is not None:
+        out["m_w"] = float(current.parameters.m_w)
+    for e, vals in current.effects.items():
+        out.update({f"{e}.{k}": float(v) for k, v in vals.items()})
+    return out
+
+
+def _fit_opts(opt: DiagnoseOptions, **kw) -> FitOptions:
+    return FitOptions(free=kw.pop("free", opt.free), seed=opt.seed, population=opt.population, weights="uncertainty",
+                      generations=opt.generations, tol=opt.tol, error_floor=opt.noise_floor_pct / 100, **kw)
+
+
+def _effect_spec(name, fixed_effects):
+    eff = get_effect(name)
+    fitted = eff.fitted_parameters()
+    fixed = {p.name: eff.diagnose_fixed.get(p.name, p.default) for p in eff.parameters if p not in fitted}
+    effects = {k: dict(v) for k, v in fixed_effects.items()}
+    effects[name] = fixed
+    return eff, fitted, effects
+
+
+def _param_table(res: FitResult, names) -> dict:
+    out = {}
+    for nm in names:
+        i = res.free.index(nm)
+        v, se = float(res.values[i]), float(res.std_errors[i])
+        out[nm] = {"value": v, "std_error": se, "t": float(v / se) if se > 0 else float("inf")}
+    return out
+
+
+def _judge(cand_fit, current, names, modes, opt, bounds, n_tried, evidence_ok=True, evidence_why=""):
+    """Score a refit against the current model; return (fields, reason or None when it passes)."""
+    n_modes = len(modes)
+    k0, k1 = len(current.free), len(cand_fit.free)
+    rss0, rss1 = _rss(current, modes), _rss(cand_fit, modes)
+    a0, a1 = _aicc(rss0, n_modes, k0), _aicc(rss1, n_modes, k1)
+    p = _f_test(rss0, k0, rss1, k1, n_modes)
+    params = _param_table(cand_fit, names)
+    fields = dict(parameters=params, rms_error_pct=cand_fit.rms_error_pct, aicc=a1, delta_aicc=a1 - a0,
+                  f_p_value=p, fit=cand_fit)
+    if not evidence_ok:
+        return fields, evidence_why
+    level = opt.alpha / max(n_tried, 1)  # Bonferroni: the best of n_tried candidates is not chance
+    if not p < level:
+        return fields, f"no better than an extra parameter buys by chance (F-test p = {p:.2g} ≥ {level:.2g})"
+    if not a1 < a0 - 2:
+        return fields, f"AICc not lower by more than 2 ({a1 - a0:+.1f})"
+    best_t = max(abs(v["t"]) for v in params.values())
+    if best_t < opt.min_t:
+        return fields, f"its parameter is not significant (|t| = {best_t:.1f} < {opt.min_t})"
+    for nm in names:
+        lo, hi, hard = (*bounds[nm], False)[:3]
+        v = params[nm]["value"]
+        if v <= lo * 1.001 or (v >= hi * 0.999 and not hard):
+            return fields, f"{nm} = {v:.4g} sits at a limit of its search range [{lo:.3g}, {hi:.3g}]"
+    return fields, None
+
+
+def _unexplained_rows(skipped, rows) -> list[dict]:
+    """Rows that fit no structural (n, branch): far duplicates, out of order, no n/branch,
+    an uncertain order. Rows that are not normal modes (low MPC) are not counted."""
+    out = []
+    for s in skipped:
+        reason = s.get("reason", "")
+        if "frequency_hz" not in s or "mpc" in reason:
+            continue
+        row = rows[s["row"] - 1] if 0 < s.get("row", 0) <= len(rows) else {}
+        out.append({"frequency_hz": float(s["frequency_hz"]), "n": s.get("n"), "branch": s.get("branch"),
+                    "row": s.get("row"), "reason": reason,
+                    "significance": _num(row.get("significance")), "n_spatial": _num(row.get("n_spatial"))})
+    return out
+
+
+def _num(v):
+    try:
+        return None if v is None or v == "" else float(v)
+    except (TypeError, ValueError):
+        return None
+
+
+def diagnose(rows, base_params: TyreParameters = TyreParameters(), opt: DiagnoseOptions = DiagnoseOptions(),
+             *, n_points: int | None = None, min_confidence: float = 0.5, progress=None) -> Diagnosis:
+    """Diagnose what a fitted model lacks, from a modal table.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Modal-table rows (``lsce`` file/CSV, or a table such as the paper's Table A1):
+        ``frequency_hz``, ``n``, ``branch``, optionally ``pair``, ``n_confidence``,
+        ``mpc``, ``significance``, ``frequency_uncertainty_hz``.
+    base_params : TyreParameters — the nominal values (the free ones are fitted)
+    opt : DiagnoseOptions
+    n_points : number of impact points of the test (for the spatial-alias check); None
+        for a table without geometry
+    min_confidence : rows with a lower ``n_confidence`` fit no (n, branch)
+    progress : callable(done, total), optional
+
+    Returns
+    -------
+    Diagnosis
+    """
+    opt.check(base_params)
+    modes, skipped = modes_from_rows(rows, min_confidence=min_confidence, split_pairs="members")
+    if not modes:
+        raise DataFormatError("no usable modes: a diagnosis needs modes with n and branch (same/opposite)")
+    modes = _with_sigma(modes, opt)
+    extra = _unexplained_rows(skipped, rows)
+    names = [c for c in (opt.candidates or tuple(EFFECTS) + PARAMETER_CANDIDATES)
+             if not (c in PARAMETER_CANDIDATES and c in opt.free)]
+    total = 1 + len(names) * max(opt.max_effects, 1)
+    done = [0]
+
+    def tick():
+        done[0] += 1
+        if progress:
+            progress(min(done[0], total), total)
+
+    base = fit(modes, base_params, _fit_opts(opt))
+    tick()
+    current, cur_modes, cur_opt_kw = base, modes, {}
+    adopted, tried, cavity_modes, relabelled = [], [], [], []
+
+    def recheck(current, cur_modes):
+        new_modes, changed = _misreads(current, cur_modes, n_points, opt)
+        if changed:
+            relabelled.extend(changed)
+            current = _refit_current(current, new_modes, opt)
+        return current, new_modes
+    residual_before = residual_analysis(base, modes, opt, n_extra=len(extra))
+    residual_now = residual_before
+    for rnd in range(1, opt.max_effects + 1):
+        round_cands = []
+        for name in names:
+            if name in adopted:
+                continue
+            c = _try(name, rnd, current, cur_modes, cur_opt_kw, extra, opt,
+                     n_tried=len([n for n in names if n not in adopted]))
+            round_cands.append(c)
+            tick()
+        if not residual_now["exceeds_noise"]:
+            round_cands = [dataclasses.replace(c, reason="not needed: the residual is at the level of the noise"
+                                               + ("" if c.reason == "passes" else f"; besides, {c.reason}"))
+                           for c in round_cands]
+        passing = [c for c in round_cands if c.reason == "passes"]
+        best = min(passing, key=lambda c: c.aicc) if passing else None
+        for c in round_cands:
+            if c is best:
+                tried.append(dataclasses.replace(c, adopted=True, reason=_adopt_reason(c)))
+            elif c.reason == "passes":
+                tried.append(dataclasses.replace(c, reason=f"passes, but {best.name} explains more "
+                                                            f"(AICc {c.aicc - best.aicc:+.1f} above it)"))
+            else:
+                tried.append(c)
+        if best is None:
+            break
+        adopted.append(best.name)
+        current = best.fit
+        if best.cavity_mode is not None:
+            # the cavity mode was the evidence; from here on the structure is fitted alone,
+            # the cavity fixed at its fitted values
+            cavity_modes.append(best.cavity_mode)
+            cur_modes = _modes_for_cavity(cur_modes, best.cavity_mode, opt)[0]
+            keep = tuple(f for f in current.free if not f.startswith(f"{best.name}."))
+            current = _refit_current(dataclasses.replace(current, free=keep), cur_modes, opt)
+        current, cur_modes = recheck(current, cur_modes)
+        cur_opt_kw = {"effects": current.effects, "free": current.free}
+        residual_now = residual_analysis(current, cur_modes, opt, n_extra=len(extra) - len(cavity_modes))
+        if not residual_now["exceeds_noise"]:
+            break
+    if progress:
+        progress(total, total)
+    explained = {round(c["frequency_hz"], 6) for c in cavity_modes}
+    unexplained = tuple(u for u in extra if round(u["frequency_hz"], 6) not in explained)
+    residual_after = residual_now
+    verdict = _verdict(adopted, tried, residual_before, residual_after, unexplained)
+    return Diagnosis(base=base, augmented=current, adopted=tuple(adopted), candidates=tuple(tried),
+                     residual_before=residual_before, residual_after=residual_after, unexplained=unexplained,
+                     cavity_modes=tuple(cavity_modes), relabelled=tuple(relabelled), skipped_rows=tuple(skipped),
+                     verdict=verdict, options=opt)
+
+
+def _misreads(current: FitResult, modes, n_points, opt) -> tuple[list, list]:
+    """Outliers that are a spatial alias of another order, read under the current model.
+
+    A grid of N points sees order n also as N − n, N + n, …: a mode whose error exceeds
+    5 σ is relabelled to the alias (either branch) the current model puts within 3 σ of
+    it, if that (n, branch) is not measured already. Returns the modes (relabelled) and
+    what was relabelled. Without N (a CSV table) nothing is relabelled.
+    """
+    if not n_points:
+        return modes, []
+    from .identify import model_frequencies
+
+    taken = {(m.n, m.branch) for m in modes}
+    out, changed = list(modes), []
+    for i, (m, row) in enumerate(zip(modes, current.modes)):
+        sig = m.uncertainty_hz / m.frequency_hz
+        if abs(row["error_pct"]) / 100 <= 5 * sig:
+            continue
+        n_max = max(x.n for x in modes) + n_points
+        aliases = sorted({k for j in range(0, n_max // n_points + 2) for k in (j * n_points - m.n, j * n_points + m.n)
+                          if 0 <= k <= n_max and k != m.n})
+        best = None
+        for k in aliases:
+            for b in ("same", "opposite"):
+                if (k, b) in taken:
+                    continue
+                f = model_frequencies(current.parameters, [k], [b], current.effects or None)[0]
+                e = abs(f / m.frequency_hz - 1)
+                ok = e <= 3 * sig or e <= 0.25 * abs(row["error_pct"]) / 100  # the outlier pulls the fit
+                if np.isfinite(f) and ok and (best is None or e < best[2]):
+                    best = (k, b, e, f)
+        if best is not None:
+            k, b, _, f = best
+            out[i] = dataclasses.replace(m, n=k, branch=b, member=None,
+                                         source=f"{m.source} (read as n = {m.n} {m.branch}: a spatial alias)")
+            taken.add((k, b))
+            changed.append({"frequency_hz": m.frequency_hz, "read_as": {"n": m.n, "branch": m.branch},
+                            "relabelled": {"n": k, "branch": b}, "model_hz": float(f),
+                            "reason": f"spatial alias on {n_points} points: the model puts n = {k} {b} at "
+                                      f"{f:.2f} Hz"})
+    # a split pair that lost a member is one mode again
+    count = {}
+    for m in out:
+        if m.member:
+            count[(m.n, m.branch)] = count.get((m.n, m.branch), 0) + 1
+    out = [dataclasses.replace(m, member=None) if m.member and count[(m.n, m.branch)] < 2 else m for m in out]
+    return out, changed
+
+
+def _adopt_reason(c: Candidate) -> str:
+    what = "a parameter value is off" if c.kind == "parameter" else "missing physics"
+    return (f"adopted ({what}): RMS {c.rms_error_pct:.3f} %, AICc {c.delta_aicc:+.1f}, F-test p = {c.f_p_value:.2g}, "
+            + ", ".join(f"{k} = {v['value']:.4g} ± {v['std_error']:.2g}" for k, v in c.parameters.items()))
+
+
+def _try(name, rnd, current, modes, cur_kw, extra, opt, n_tried) -> Candidate:
+    """Refit with one more candidate on top of the current model; judge it."""
+    fixed_effects = dict(cur_kw.get("effects", {}))
+    free = tuple(cur_kw.get("free", opt.free))
+    struct_free = tuple(f for f in free if "." not in f)
+    prev_eff_free = tuple(tuple(f.split(".", 1)) for f in free if "." in f)
+    start = current.parameters
+    if name in PARAMETER_CANDIDATES:
+        lo, hi = DEFAULT_BOUNDS[name]
+        fo = _fit_opts(opt, free=struct_free + (name,), effects=fixed_effects, effect_free=prev_eff_free,
+                       start=_start(current))
+        fo = dataclasses.replace(fo, bounds={})
+        res = fit(modes, start if name != "m_w" or start.m_w is not None else start.replace(m_w=1000.0), fo)
+        fields, why = _judge(res, current, [name], modes, opt, {name: (lo, hi)}, n_tried)
+        return Candidate(name=name, kind="parameter", title=f"nominal {name} is off", round=rnd,
+                         signature="a parameter value is off, not missing physics", adopted=False,
+                         reason=why or "passes", **fields)
+    eff, fitted, effects = _effect_spec(name, fixed_effects)
+    efree = prev_eff_free + tuple((name, p.name) for p in fitted)
+    bounds = {f"{name}.{p.name}": (p.lower, p.upper, p.upper_is_physical) for p in fitted}
+    pnames = [f"{name}.{p.name}" for p in fitted]
+    common = dict(kind=eff.kind, title=eff.title, round=rnd, signature=eff.signature, adopted=False)
+    if eff.kind == "coupling":
+        pairs = [m for m in modes if m.member]
+        if not pairs:
+            return Candidate(name=name, parameters={}, rms_error_pct=None, aicc=None, delta_aicc=None,
+                             f_p_value=None, reason="no evidence: no split pair in the modal table", **common)
+    if eff.kind == "acoustic":
+        return _try_cavity(name, effects, efree, bounds, pnames, current, modes, struct_free, extra, opt,
+                           n_tried, common)
+    fo = _fit_opts(opt, free=struct_free, effects=effects, effect_free=efree,
+                   start={**_start(current), **{f"{name}.{p.name}": p.default for p in fitted}})
+    res = fit(modes, start, fo)
+    fields, why = _judge(res, current, pnames, modes, opt, bounds, n_tried)
+    return Candidate(name=name, reason=why or "passes", **fields, **common)
+
+
+def _modes_for_cavity(modes, cav, opt):
+    """The structural modes once ``cav`` is the cavity mode: drop it where it was kept as
+    n = 1 and let the row it had displaced (an n = 1 duplicate) take its place."""
+    f_c = cav["frequency_hz"]
+    kept = [m for m in modes if not (m.n == 1 and abs(m.frequency_hz - f_c) <= 1e-9 * f_c)]
+    if len(kept) == len(modes):
+        return kept, None
+    b = next(m.branch for m in modes if m.n == 1 and abs(m.frequency_hz - f_c) <= 1e-9 * f_c)
+    alt = cav.get("displaced")
+    if alt is not None:
+        kept.append(MeasuredMode(1, b, alt, source="n = 1 row displaced by the cavity mode",
+                                 uncertainty_hz=alt * opt.noise_floor_pct / 100))
+    return kept, b
+
+
+def _try_cavity(name, effects, efree, bounds, pnames, current, modes, struct_free, extra, opt, n_tried,
+                common) -> Candidate:
+    """The air cavity: a mode with an n = 1 tread pattern in the cavity band that fits no
+    structural (n, branch) (or that displaced the structural n = 1 from its label)."""
+    lo, hi = cavity_band_hz(current.parameters.R, opt)
+    cands = []
+    for u in extra:
+        n_ok = u.get("n") == 1 or (u.get("n_spatial") is not None and int(u["n_spatial"]) == 1)
+        if n_ok and lo <= u["frequency_hz"] <= hi:
+            cands.append({"frequency_hz": u["frequency_hz"], "displaced": None, "row": u.get("row")})
+            # the row kept as n = 1 may be the cavity instead, the unexplained one the structure's
+            for m in modes:
+                if m.n == 1 and m.branch == u.get("branch") and lo <= m.frequency_hz <= hi:
+                    cands.append({"frequency_hz": m.frequency_hz, "displaced": u["frequency_hz"], "row": None})
+    if not cands:
+        return Candidate(name=name, parameters={}, rms_error_pct=None, aicc=None, delta_aicc=None, f_p_value=None,
+                         reason=f"no evidence: no unexplained n = 1 mode in the cavity band {lo:.0f}–{hi:.0f} Hz",
+                         **common)
+    best = None
+    for cav in cands:
+        struct, _ = _modes_for_cavity(modes, cav, opt)
+        data = struct + [MeasuredMode(1, "cavity", cav["frequency_hz"], source="cavity mode",
+                                      uncertainty_hz=cav["frequency_hz"] * opt.noise_floor_pct / 100)]
+        eff_start = {**effects, name: {**effects[name], "f_cavity_hz": float(np.clip(cav["frequency_hz"],
+                                                                                    50.0, 400.0))}}
+        fo = _fit_opts(opt, free=struct_free, effects=eff_start, effect_free=efree,
+                       start={**_start(current), **{f"{name}.{k}": v for k, v in eff_start[name].items()}})
+        res = fit(data, current.parameters, fo)
+        # score on the structural modes only (the cavity mode is the evidence, not the fit)
+        struct_res = _restrict(res, len(struct))
+        if best is None or _rss(struct_res, struct) < _rss(best[1], best[3]):
+            best = (cav, struct_res, res, struct)
+    cav, struct_res, res, struct = best
+    cav_err = next(m for m in res.modes if m["branch"] == "cavity")
+    ok = abs(cav_err["error_pct"]) <= 3 * opt.noise_floor_pct
+    cur_on_struct = current if len(struct) == len(modes) and cav["displaced"] is None else _refit_current(
+        current, struct, opt)
+    fields, why = _judge(struct_res, cur_on_struct, pnames, struct, opt, bounds, n_tried, evidence_ok=ok,
+                         evidence_why=f"the model's cavity mode misses the measured one by {cav_err['error_pct']:+.2f} %")
+    fields["fit"] = res
+    cavity_mode = {"frequency_hz": cav["frequency_hz"], "n": 1, "model_hz": cav_err["model_hz"],
+                   "displaced": cav["displaced"], "band_hz": [lo, hi]}
+    return Candidate(name=name, reason=why or "passes", cavity_mode=cavity_mode, **fields, **common)
+
+
+def _restrict(res: FitResult, k: int) -> FitResult:
+    """The fit's structural modes only (the first ``k``): RMS and table recomputed."""
+    modes = res.modes[:k]
+    e = np.array([m["error_pct"] for m in modes])
+    return dataclasses.replace(res, modes=modes, rms_error_pct=float(np.sqrt(np.mean(e**2))),
+                               max_error_pct=float(np.max(np.abs(e))))
+
+
+def _refit_current(current: FitResult, modes, opt) -> FitResult:
+    """The current model refitted to another set of structural modes (for a fair comparison)."""
+    names = [f for f in current.free if "." not in f]
+    efree = tuple(tuple(f.split(".", 1)) for f in current.free if "." in f)
+    fo = _fit_opts(opt, free=tuple(names), effects=current.effects, effect_free=efree, start=_start(current))
+    return fit(modes, current.parameters, fo)
+
+
+def _verdict(adopted, tried, before, after, unexplained) -> str:
+    if not before["exceeds_noise"] and not adopted:
+        v = ("no effect needed: the base model's residual is at the level of the noise "
+             f"(RMS {before['rms_error_pct']:.3f} %, χ² p = {before['p_value']:.2g})")
+    elif adopted:
+        what = ", ".join(adopted)
+        v = (f"adopted {what}: RMS error {before['rms_error_pct']:.3f} % → {after['rms_error_pct']:.3f} %, "
+             f"max {before['max_error_pct']:.3f} % → {after['max_error_pct']:.3f} %")
+        if after["exceeds_noise"]:
+            v += ("; a residual remains that no candidate explains ("
+                  + "; ".join(after["pattern"]["findings"][1:] or ["no clear pattern"]) + ")")
+    else:
+        v = ("a residual remains that no candidate explains: "
+             + "; ".join(before["pattern"]["findings"]))
+    if unexplained:
+        v += f"; {len(unexplained)} measured mode(s) fit no structural (n, branch)"
+    return v
+
+
+def predictions(diag: Diagnosis, n_max: int) -> dict:
+    """Both models' frequencies of every (n, branch) up to ``n_max``, with 1σ."""
+    base = predict_table(diag.base, n_max, measured=diag.base.modes)
+    aug = predict_table(diag.augmented, n_max, measured=diag.augmented.modes)
+    return {"base": base, "augmented": aug}
+
+
+def mode_table(diag: Diagnosis) -> list[dict]:
+    """Per measured mode: measured, base model, augmented model and both errors (%)."""
+    aug = {(m["n"], m["branch"], round(m["measured_hz"], 9)): m for m in diag.augmented.modes}
+    out = []
+    for m in diag.base.modes:
+        a = aug.get((m["n"], m["branch"], round(m["measured_hz"], 9)))
+        out.append({"n": m["n"], "branch": m["branch"], **({"member": m["member"]} if "member" in m else {}),
+                    "measured_hz": m["measured_hz"], "base_hz": m["model_hz"], "base_error_pct": m["error_pct"],
+                    "augmented_hz": a["model_hz"] if a else None, "augmented_error_pct": a["error_pct"] if a else None})
+    for c in diag.cavity_modes:
+        out.append({"n": 1, "branch": "cavity", "measured_hz": c["frequency_hz"], "base_hz": None,
+                    "base_error_pct": None, "augmented_hz": c["model_hz"],
+                    "augmented_error_pct": 100 * (c["model_hz"] / c["frequency_hz"] - 1)})
+    return out
