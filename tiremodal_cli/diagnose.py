@@ -42,7 +42,7 @@ from .identify import DEFAULT_BOUNDS, FitOptions, FitResult, MeasuredMode, fit, 
 from .model import TyreParameters
 
 __all__ = ["DiagnoseOptions", "Candidate", "Diagnosis", "residual_analysis", "diagnose", "PARAMETER_CANDIDATES",
-           "cavity_band_hz"]
+           "cavity_band_hz", "report", "mode_table", "predictions"]
 
 #: Nominal values that may be off: freed one at a time ("a parameter value is off").
 PARAMETER_CANDIDATES = ("rhoA", "m_s", "m_w", "b")
@@ -295,11 +295,18 @@ def _param_table(res: FitResult, names) -> dict:
     return out
 
 
-def _judge(cand_fit, current, names, modes, opt, bounds, n_tried, evidence_ok=True, evidence_why=""):
-    """Score a refit against the current model; return (fields, reason or None when it passes)."""
+def _judge(cand_fit, current, names, modes, opt, bounds, n_tried, evidence_ok=True, evidence_why="",
+           extra_point=None):
+    """Score a refit against the current model; return (fields, reason or None when it passes).
+
+    ``extra_point`` = (z_current, z_candidate): one more measured point (a cavity mode)
+    with its normalised error under either model.
+    """
     n_modes = len(modes)
     k0, k1 = len(current.free), len(cand_fit.free)
     rss0, rss1 = _rss(current, modes), _rss(cand_fit, modes)
+    if extra_point is not None:
+        rss0, rss1, n_modes = rss0 + extra_point[0] ** 2, rss1 + extra_point[1] ** 2, n_modes + 1
     a0, a1 = _aicc(rss0, n_modes, k0), _aicc(rss1, n_modes, k1)
     p = _f_test(rss0, k0, rss1, k1, n_modes)
     params = _param_table(cand_fit, names)
@@ -409,13 +416,13 @@ def diagnose(rows, base_params: TyreParameters = TyreParameters(), opt: Diagnose
                                                + ("" if c.reason == "passes" else f"; besides, {c.reason}"))
                            for c in round_cands]
         passing = [c for c in round_cands if c.reason == "passes"]
-        best = min(passing, key=lambda c: c.aicc) if passing else None
+        best = min(passing, key=lambda c: c.delta_aicc) if passing else None
         for c in round_cands:
             if c is best:
                 tried.append(dataclasses.replace(c, adopted=True, reason=_adopt_reason(c)))
             elif c.reason == "passes":
                 tried.append(dataclasses.replace(c, reason=f"passes, but {best.name} explains more "
-                                                            f"(AICc {c.aicc - best.aicc:+.1f} above it)"))
+                                                            f"(ΔAICc {c.delta_aicc - best.delta_aicc:+.1f} above it)"))
             else:
                 tried.append(c)
         if best is None:
@@ -590,8 +597,17 @@ def _try_cavity(name, effects, efree, bounds, pnames, current, modes, struct_fre
     ok = abs(cav_err["error_pct"]) <= 3 * opt.noise_floor_pct
     cur_on_struct = current if len(struct) == len(modes) and cav["displaced"] is None else _refit_current(
         current, struct, opt)
+    # the cavity mode is a measured point too: the current model leaves it at its distance
+    # from its nearest n = 1 mode, the candidate at its own cavity mode's error
+    from .identify import model_frequencies
+
+    f_c = cav["frequency_hz"]
+    near = model_frequencies(cur_on_struct.parameters, [1, 1], ["same", "opposite"], cur_on_struct.effects or None)
+    e0 = float(np.nanmin(np.abs(near / f_c - 1))) / (opt.noise_floor_pct / 100)
+    e1 = cav_err["error_pct"] / opt.noise_floor_pct
     fields, why = _judge(struct_res, cur_on_struct, pnames, struct, opt, bounds, n_tried, evidence_ok=ok,
-                         evidence_why=f"the model's cavity mode misses the measured one by {cav_err['error_pct']:+.2f} %")
+                         evidence_why=f"the model's cavity mode misses the measured one by {cav_err['error_pct']:+.2f} %",
+                         extra_point=(e0, e1))
     fields["fit"] = res
     cavity_mode = {"frequency_hz": cav["frequency_hz"], "n": 1, "model_hz": cav_err["model_hz"],
                    "displaced": cav["displaced"], "band_hz": [lo, hi]}
@@ -654,3 +670,53 @@ def mode_table(diag: Diagnosis) -> list[dict]:
                     "base_error_pct": None, "augmented_hz": c["model_hz"],
                     "augmented_error_pct": 100 * (c["model_hz"] / c["frequency_hz"] - 1)})
     return out
+
+
+def _fit_block(res) -> dict:
+    return {"parameters": {n: {"value": float(v), "std_error": float(s)} for n, v, s in
+                           zip(res.free, res.values, res.std_errors)},
+            "all_parameters": res.parameters.to_dict(), "effects": res.effects,
+            "undetermined": res.undetermined,
+            "rms_error_pct": res.rms_error_pct, "max_error_pct": res.max_error_pct}
+
+
+def _finite(obj):
+    """Non-finite floats (an infinite t of a zero error bar, an undefined AICc) as None."""
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, (float, np.floating)) and not np.isfinite(obj):
+        return None
+    return obj
+
+
+def report(diag, n_max: int = 12) -> dict:
+    """The diagnosis as JSON-ready data (keys documented in docs/diagnose.md)."""
+    return _finite(_report(diag, n_max))
+
+
+def _report(diag, n_max):
+    cands = [{"name": c.name, "kind": c.kind, "title": c.title, "round": c.round,
+              "score": c.delta_aicc, "aicc": c.aicc, "f_p_value": c.f_p_value,
+              "rms_error_pct": c.rms_error_pct, "parameters": c.parameters, "adopted": c.adopted,
+              "reason": c.reason, "signature": c.signature} for c in diag.candidates]
+    return {
+        "verdict": diag.verdict,
+        "base": _fit_block(diag.base),
+        "augmented": _fit_block(diag.augmented),
+        "adopted_effects": list(diag.adopted),
+        "parameter_off": [c.name for c in diag.candidates if c.adopted and c.kind == "parameter"],
+        "candidates": cands,
+        "modes": mode_table(diag),
+        "unexplained_modes": [{"frequency_hz": u["frequency_hz"], "n": u.get("n"), "reason": u["reason"]}
+                              for u in diag.unexplained],
+        "cavity_modes": list(diag.cavity_modes),
+        "relabelled_modes": list(diag.relabelled),
+        "residual_before": {k: v for k, v in diag.residual_before.items() if k != "modes"},
+        "residual_after": {k: v for k, v in diag.residual_after.items() if k != "modes"},
+        "predictions": predictions(diag, n_max),
+        "options": {"noise_floor_pct": diag.options.noise_floor_pct, "alpha": diag.options.alpha,
+                    "min_t": diag.options.min_t, "max_effects": diag.options.max_effects,
+                    "seed": diag.options.seed, "free": list(diag.options.free)},
+    }

@@ -29,7 +29,7 @@ from .errors import DataFormatError, ParameterError
 from .model import TyreParameters, closed_form_hz, solve_modes
 
 __all__ = ["MeasuredMode", "FitOptions", "FitResult", "DEFAULT_BOUNDS", "model_frequencies", "fit",
-           "modes_from_rows", "predict_table", "PAPER_GA"]
+           "modes_from_rows", "predict_table", "fit_report", "PAPER_GA"]
 
 #: Search bounds of each parameter (SI; see docs/model.md for units).
 DEFAULT_BOUNDS = {"k_r1": (1e5, 1e8), "k_r2": (1e5, 1e8), "EI": (0.1, 1e4), "rhoA": (1.0, 200.0),
@@ -201,7 +201,7 @@ def _row_problem(get, n, b, f, min_confidence, min_mpc) -> str | None:
     return None
 
 
-def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=None) -> np.ndarray:
+def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=None, meas_hz=None) -> np.ndarray:
     """Model frequencies (Hz) of the given (n, branch) pairs.
 
     Parameters
@@ -213,7 +213,9 @@ def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=Non
     members : (k,) sequence of {None, "lower", "upper"}, optional
         Which member of a cos/sin pair a measured mode is. Only a coupling effect (a
         lumped mass) splits the pairs; then "lower"/"upper" take that member and None
-        the pair's mean (an unresolved pair). Without one both members are one frequency.
+        the member nearer ``meas_hz`` (a pair of which one member was found), or the
+        pair's mean without it. Without a coupling both members are one frequency.
+    meas_hz : (k,) array, optional — the measured frequencies (for None members)
 
     Returns
     -------
@@ -249,15 +251,30 @@ def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=Non
             fc = m.freq_hz[np.array(m.branch) == "cavity"]
             out[cavity] = fc.min() if fc.size else np.nan
         return out
-    m = solve_modes(p, n_max=max(2, int(ns.max())), effects=eff)
-    mb = np.array(m.branch)
     mem = [None] * ns.size if members is None else list(members)
+    coupling = [(e, v) for e, v in eff if e.couple is not None]
+    if len(coupling) == 1 and coupling[0][0].extra.get("point_mass") and not cavity.any():
+        from .model import point_mass_pairs
+
+        pairs = point_mass_pairs(p, coupling[0][1][coupling[0][0].extra["point_mass"]], max(2, int(ns.max())), eff)
+        lookup = lambda n, b: np.array(pairs.get((n, b), ()))  # noqa: E731
+    else:
+        m = solve_modes(p, n_max=max(2, int(ns.max())), effects=eff)
+        mb = np.array(m.branch)
+        lookup = lambda n, b: np.sort(m.freq_hz[(m.n == n) & (mb == b)])  # noqa: E731
     for i, (n, b) in enumerate(zip(ns, br)):
-        f = np.sort(m.freq_hz[(m.n == n) & (mb == b)])
+        f = lookup(n, b)
         if f.size == 0:
             continue
         pair = f[:2] if b != "cavity" else f[:1]
-        out[i] = pair[0] if mem[i] == "lower" else pair[-1] if mem[i] == "upper" else pair.mean()
+        if mem[i] == "lower":
+            out[i] = pair[0]
+        elif mem[i] == "upper":
+            out[i] = pair[-1]
+        elif meas_hz is not None:  # one member found: the nearer one
+            out[i] = pair[np.argmin(np.abs(pair - meas_hz[i]))]
+        else:
+            out[i] = pair.mean()
     return out
 
 
@@ -324,7 +341,7 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
 
     def residuals(logx):
         p, eff = _apply(base, opt, names, logx)
-        f = model_frequencies(p, ns, br, eff or None, mem)
+        f = model_frequencies(p, ns, br, eff or None, mem, f_meas)
         r = (f - f_meas) / f_meas
         return np.where(np.isfinite(r), r, 10.0) * w
 
@@ -377,7 +394,7 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
         elif at_bound:
             undetermined[name] = "at a bound of the search"
     p, eff = _apply(base, opt, names, x)
-    f_mod = model_frequencies(p, ns, br, eff or None, mem)
+    f_mod = model_frequencies(p, ns, br, eff or None, mem, f_meas)
     err = 100 * (f_mod - f_meas) / f_meas
     table = [{"n": int(m.n), "branch": m.branch, "measured_hz": m.frequency_hz, "model_hz": float(fm),
               "error_pct": float(e), **({"member": m.member} if m.member else {})}
@@ -425,3 +442,24 @@ def predict_table(res: FitResult, n_max: int, *, measured=()) -> list[dict]:
     meas = {(m["n"], m["branch"]) for m in measured}
     return [{"n": int(n), "branch": b, "model_hz": float(f), "std_hz": float(np.sqrt(max(v, 0))),
              "measured": (int(n), b) in meas} for n, b, f, v in zip(ns, br, f0, var)]
+
+
+def fit_report(res, skipped, predictions) -> dict:
+    """An identification as JSON-ready data (the keys of ``identify --json``)."""
+    names = list(res.free)
+    return {
+        "parameters": {n: {"value": float(v), "std_error": float(s), "relative_std_error_pct": float(100 * s / v)}
+                       for n, v, s in zip(names, res.values, res.std_errors)},
+        "all_parameters": res.parameters.to_dict(), "effects": res.effects,
+        "correlation": {"names": names, "matrix": np.round(res.correlation, 6).tolist()},
+        "undetermined": res.undetermined,
+        "rms_error_pct": res.rms_error_pct, "max_error_pct": res.max_error_pct,
+        "modes": res.modes,
+        "not_followed": [m for m in res.modes if abs(m["error_pct"]) > max(2.0, 2 * res.rms_error_pct)],
+        "skipped_rows": skipped, "predictions": predictions,
+        "history": [{"generation": g, "rms_error_pct": 100 * v} for g, v in res.history],
+        "search": {"method": "differential_evolution + least_squares", "seed": res.options.seed,
+                   "population": res.options.population, "generations": res.options.generations,
+                   "crossover": res.options.crossover, "mutation": res.options.mutation,
+                   "weights": res.options.weights},
+    }

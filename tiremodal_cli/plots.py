@@ -14,7 +14,7 @@ import numpy as np  # noqa: E402
 from .files import atomic_path  # noqa: E402
 
 __all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_shapes", "plot_synthesis",
-           "plot_dispersion", "plot_convergence", "plot_sensitivity"]
+           "plot_dispersion", "plot_convergence", "plot_sensitivity", "plot_residuals"]
 
 
 def save_figure(fig, path, *, overwrite: bool = False) -> None:
@@ -228,3 +228,25 @@ def plot_sensitivity(ns, branches, S, names, *, ax=None):
     ax[0].set_ylabel("∂ln f / ∂ln p")
     ax[1].legend(fontsize=8)
     return ax
+
+
+def plot_residuals(modes, *, axes=None):
+    """Frequency error against n per branch, before (base) and after (augmented) a diagnosis.
+
+    modes : dicts with n, branch, base_error_pct, augmented_error_pct (``diagnose`` report).
+    Returns the figure.
+    """
+    if axes is None:
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    for ax, br in zip(axes, ("same", "opposite")):
+        m = sorted((x for x in modes if x["branch"] == br), key=lambda x: x["n"])
+        n = [x["n"] for x in m]
+        ax.axhline(0, color="k", lw=0.8)
+        ax.plot(n, [x["base_error_pct"] for x in m], "o", mfc="none", color="tab:red", label="base model")
+        ax.plot(n, [x["augmented_error_pct"] for x in m], "x", color="tab:blue", label="augmented model")
+        ax.set_title(f"{br} direction")
+        ax.set_xlabel("circumferential order n")
+        ax.grid(True, alpha=0.3)
+    axes[0].set_ylabel("model − measured [%]")
+    axes[1].legend(fontsize=8)
+    return axes[0].figure

@@ -8,7 +8,7 @@ import click
 import numpy as np
 
 from ..files import check_overwrite, write_text_atomic
-from ..identify import PAPER_GA, FitOptions, fit, modes_from_rows, predict_table
+from ..identify import PAPER_GA, FitOptions, fit, fit_report, modes_from_rows, predict_table
 from .main import cli
 from .options import (Progress, echo_json, json_option, load_params, overwrite_option, params_options,
                       read_table_rows, rows_to_csv)
@@ -32,26 +32,6 @@ def fit_options(free, bounds, weights, seed, paper_ga, population, generations):
     if generations:
         kw["generations"] = generations
     return FitOptions(**kw)
-
-
-def fit_report(res, skipped, predictions) -> dict:
-    names = list(res.free)
-    return {
-        "parameters": {n: {"value": float(v), "std_error": float(s), "relative_std_error_pct": float(100 * s / v)}
-                       for n, v, s in zip(names, res.values, res.std_errors)},
-        "all_parameters": res.parameters.to_dict(), "effects": res.effects,
-        "correlation": {"names": names, "matrix": np.round(res.correlation, 6).tolist()},
-        "undetermined": res.undetermined,
-        "rms_error_pct": res.rms_error_pct, "max_error_pct": res.max_error_pct,
-        "modes": res.modes,
-        "not_followed": [m for m in res.modes if abs(m["error_pct"]) > max(2.0, 2 * res.rms_error_pct)],
-        "skipped_rows": skipped, "predictions": predictions,
-        "history": [{"generation": g, "rms_error_pct": 100 * v} for g, v in res.history],
-        "search": {"method": "differential_evolution + least_squares", "seed": res.options.seed,
-                   "population": res.options.population, "generations": res.options.generations,
-                   "crossover": res.options.crossover, "mutation": res.options.mutation,
-                   "weights": res.options.weights},
-    }
 
 
 def common_fit_options(f):

@@ -15,7 +15,8 @@ from .. import __version__
 from ..errors import TiremodalError
 
 _NO_ARGS = getattr(click.exceptions, "NoArgsIsHelpError", None)  # click ≥ 8.2
-COMMANDS = ("simulate", "ingest", "info", "frf", "lsce", "mac", "predict", "identify", "sensitivity")
+COMMANDS = ("run", "simulate", "ingest", "info", "frf", "lsce", "mac", "predict", "identify", "diagnose",
+            "sensitivity")
 
 
 class TiremodalGroup(click.Group):
@@ -68,7 +69,7 @@ def cli(verbose, quiet):
 
 
 def _register():
-    from . import frf, identify, info, ingest, lsce, mac, predict, sensitivity, simulate  # noqa: F401
+    from . import diagnose, frf, identify, info, ingest, lsce, mac, predict, run, sensitivity, simulate  # noqa: F401
 
 
 _register()

@@ -36,5 +36,6 @@ EFFECT = Effect(
     couple=_couple,
     kind="coupling",
     reference="Allaei, Soedel & Yang 1986",
+    extra={"point_mass": "m_a"},  # a rank-one mass: model.point_mass_pairs solves it fast
     diagnose_free=("m_a",),  # the frequencies do not depend on where the mass sits
 )

@@ -1,0 +1,55 @@
+"""``tiremodal run``: the whole pipeline on one measurement (frf → lsce → identify → diagnose)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ..errors import OutputExistsError
+from ..pipeline import MANIFEST, OUTPUTS, RunOptions, run
+from .main import cli
+from .options import echo_json, json_option, load_params, params_options
+
+
+@cli.command("run")
+@click.argument("measurement", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("-o", "--output", "outdir", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Folder for every stage's output.")
+@params_options
+@click.option("--band", nargs=2, type=float, metavar="LO HI", help="lsce band, Hz (default 0.04 fs … 0.293 fs).")
+@click.option("--exp-end", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.05,
+              show_default=True, help="Exponential window's value at the record's end (corrected in lsce).")
+@click.option("--no-exp-window", is_flag=True, help="No exponential window.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--noise-floor-pct", type=click.FloatRange(0, 100, min_open=True), default=0.1, show_default=True)
+@click.option("--max-effects", type=click.IntRange(0, 5), default=2, show_default=True)
+@click.option("--overwrite", is_flag=True, help="Replace the outputs of an earlier run in OUTDIR.")
+@json_option
+def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp_window, seed, noise_floor_pct,
+            max_effects, overwrite, as_json):
+    """Run frf → lsce → identify → diagnose on MEASUREMENT, writing each stage into OUTDIR.
+
+    Writes frf.h5, modal.h5, modes.csv, identify.json, diagnosis.json and, last, run.json
+    (checksums and summary). Prints the summary (JSON with --json).
+    """
+    existing = [n for n in (*OUTPUTS, MANIFEST) if (outdir / n).exists()]
+    if existing and not overwrite:
+        raise OutputExistsError(f"output {str(outdir / existing[0])!r} exists; pass --overwrite to replace it")
+    base, effects = load_params(params_file, param_items)
+    if effects:
+        raise click.BadParameter("run finds the effects itself: a params file holds no [effects] here",
+                                 param_hint="--params")
+    if "m_w" not in dict(p.split("=", 1)[0].strip() for p in param_items if "=" in p) and not params_file:
+        base = base.replace(m_w=1000.0)
+    opt = RunOptions(band=tuple(band) if band else None, exp_end=None if no_exp_window else exp_end, seed=seed,
+                     noise_floor_pct=noise_floor_pct, max_effects=max_effects)
+    summary = run(measurement, outdir, opt, params=base, progress=lambda s: click.echo(f"run: {s} …", err=True))
+    if as_json:
+        echo_json(summary)
+        return
+    click.echo(f"{summary['measurement']}: {summary['modes_found']} modes, {len(summary['rejected_hits'])} rejected hit(s)")
+    click.echo("identified: " + ", ".join(f"{k} = {v['value']:.5g} ± {v['std_error']:.2g}"
+                                          for k, v in summary["identified"].items()))
+    click.echo(f"diagnosis: {summary['verdict']}")
+    click.echo(f"wrote {outdir}/: {', '.join(OUTPUTS)}, {MANIFEST}")
