@@ -644,8 +644,9 @@ def _verdict(adopted, tried, before, after, unexplained) -> str:
     else:
         v = ("a residual remains that no candidate explains: "
              + "; ".join(before["pattern"]["findings"]))
-    if unexplained:
-        v += f"; {len(unexplained)} measured mode(s) fit no structural (n, branch)"
+    tail = f"{len(unexplained)} measured mode(s) fit no structural (n, branch)"
+    if unexplained and tail not in v:  # the pattern's findings may say it already
+        v += f"; {tail}"
     return v
 
 

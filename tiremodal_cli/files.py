@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import json
 import os
 import tempfile
 from collections.abc import Iterator
@@ -24,7 +25,7 @@ def _umask() -> int:
 
 _UMASK = _umask()
 
-__all__ = ["atomic_path", "check_overwrite", "sha256_file", "write_text_atomic"]
+__all__ = ["atomic_path", "check_overwrite", "dumps", "sha256_file", "write_text_atomic"]
 
 
 def check_overwrite(path: str | os.PathLike, overwrite: bool) -> Path:
@@ -74,3 +75,22 @@ def sha256_file(path: str | os.PathLike, *, chunk: int = 1 << 20) -> str:
         while block := fh.read(chunk):
             h.update(block)
     return h.hexdigest()
+
+
+def _default(o):
+    import numpy as np
+
+    if isinstance(o, np.integer):
+        return int(o)
+    if isinstance(o, np.floating):
+        return float(o)
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (set, tuple)):
+        return list(o)
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def dumps(obj) -> str:
+    """JSON text of ``obj`` (numpy scalars and arrays allowed; NaN refused)."""
+    return json.dumps(obj, indent=2, default=_default, allow_nan=False) + "\n"

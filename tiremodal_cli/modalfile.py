@@ -11,7 +11,9 @@ rad/s), ``mpc``, ``significance``, ``group``, ``n`` (−1: none), ``n_spatial``,
 geometry ``point_angle``, ``point_index``, ``channel_name``, ``channel_location``,
 ``channel_angle``; ``fit_error`` (n_channels, n_points); the stabilization diagram
 ``diagram`` (n_poles, 5): group, order, frequency_hz, damping_ratio, status code
-(0 new, 1 f, 2 fd, 3 fv, 4 stable).
+(0 new, 1 f, 2 fd, 3 fv, 4 stable); optionally the re-synthesised FRFs of the modal
+model (with its residual terms) ``synthesis`` (n_channels, n_points, n_band) complex64
+on the lines ``synthesis_freq_hz`` (n_band,), for measured-against-synthesised plots.
 """
 
 from __future__ import annotations
@@ -70,6 +72,8 @@ class ModalTable:
     meta: dict | None = None
     clusters: list | None = None
     rejected: list | None = None
+    synthesis: np.ndarray | None = None
+    synthesis_freq_hz: np.ndarray | None = None
 
     @property
     def n_modes(self) -> int:
@@ -99,7 +103,7 @@ def table_from_result(res, classes, *, point_angle, point_index, channel_name, c
         channel_name=tuple(channel_name), channel_location=tuple(channel_location),
         channel_angle=np.asarray(channel_angle, float), fit_error=res.fit_error,
         diagram=np.array(diag, dtype=float).reshape(-1, 5), form=form, meta=res.meta, clusters=clusters,
-        rejected=res.rejected)
+        rejected=res.rejected, synthesis=res.synthesis, synthesis_freq_hz=res.band_freq_hz)
 
 
 def frequency_uncertainty(t: ModalTable) -> np.ndarray:
@@ -160,6 +164,9 @@ def write_modal(path, t: ModalTable, *, input_file: str = "", input_sha256: str 
                 h.create_dataset(name, data=np.asarray(getattr(t, name)))
             for name in ("branch", "channel_name", "channel_location"):
                 h.create_dataset(name, data=list(getattr(t, name)), dtype=s)
+            if t.synthesis is not None and t.synthesis_freq_hz is not None:
+                h.create_dataset("synthesis", data=np.asarray(t.synthesis, np.complex64), compression="gzip")
+                h.create_dataset("synthesis_freq_hz", data=np.asarray(t.synthesis_freq_hz, float))
 
 
 def read_modal(path) -> ModalTable:
@@ -175,6 +182,7 @@ def read_modal(path) -> ModalTable:
                                        "shapes", "point_angle", "point_index", "channel_angle", "fit_error",
                                        "diagram")}
             strs = {k: _strings(h[k]) for k in ("branch", "channel_name", "channel_location")}
+            d.update({k: h[k][()] for k in ("synthesis", "synthesis_freq_hz") if k in h})
             a = dict(h.attrs)
         except KeyError as exc:
             raise DataFormatError(f"{where}: dataset {exc} is missing") from None

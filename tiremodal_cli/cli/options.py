@@ -7,28 +7,12 @@ import sys
 from pathlib import Path
 
 import click
-import numpy as np
+
+from ..files import dumps  # noqa: F401  (re-exported for the commands)
 
 overwrite_option = click.option("--overwrite", is_flag=True,
                                 help="Replace existing outputs (refused otherwise).")
 json_option = click.option("--json", "as_json", is_flag=True, help="Print JSON on stdout.")
-
-
-def _default(o):
-    if isinstance(o, np.integer):
-        return int(o)
-    if isinstance(o, np.floating):
-        return float(o)
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, (set, tuple)):
-        return list(o)
-    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
-
-
-def dumps(obj) -> str:
-    """JSON text of ``obj`` (numpy scalars and arrays allowed)."""
-    return json.dumps(obj, indent=2, default=_default, allow_nan=False) + "\n"
 
 
 def echo_json(obj) -> None:

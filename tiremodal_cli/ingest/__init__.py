@@ -12,7 +12,7 @@ from ..config import load_mapping
 from ..errors import DataFormatError, ParameterError
 from ..measurement import LOCATIONS
 
-__all__ = ["ChannelMap", "load_channel_map", "point_angles"]
+__all__ = ["ChannelMap", "load_channel_map", "point_angles", "source_kind", "read_source", "test_folder_kind"]
 
 
 class ChannelMap(dict):
@@ -69,3 +69,53 @@ def point_angles(keys, points: dict, where: str) -> np.ndarray:
     if missing:
         raise DataFormatError(f"{where}: point {missing[0]!r} has no angle in the mapping's [points]")
     return np.array([points[str(k)] for k in keys])
+
+
+def test_folder_kind(folder) -> str | None:
+    """What a folder holds as one test: ``"csv"`` (``point*.csv``), ``"uff"`` (``*.uff``/``*.unv``)
+    or None (neither)."""
+    from pathlib import Path
+
+    folder = Path(folder)
+    if not folder.is_dir():
+        return None
+    names = [q.name.lower() for q in folder.iterdir() if q.is_file()]
+    if any(n.startswith("point") and n.endswith(".csv") for n in names):
+        return "csv"
+    if any(n.endswith((".uff", ".unv")) for n in names):
+        return "uff"
+    return None
+
+
+def source_kind(sources) -> str:
+    """``"csv"`` for one folder of ``point*.csv`` files, else ``"uff"``."""
+    from pathlib import Path
+
+    sources = [Path(s) for s in sources]
+    return "csv" if len(sources) == 1 and test_folder_kind(sources[0]) == "csv" else "uff"
+
+
+def read_source(sources, kind: str = "auto", mapping=None, channel_options=(), **attrs):
+    """A Measurement from UFF 58 files/folders or one CSV folder (``docs/ingest.md``).
+
+    Parameters
+    ----------
+    sources : sequence of paths
+    kind : "auto", "uff" or "csv"
+    mapping : path of the mapping file (TOML/JSON), optional
+    channel_options : ``KEY=NAME,LOCATION,ANGLE_DEG`` strings
+    attrs : inflation_pressure (Pa), tire, description — recorded in the measurement
+    """
+    from .csv import read_csv_folder
+    from .uff import read_uff_time
+
+    chans, points = load_channel_map(mapping, channel_options)
+    kind = source_kind(sources) if kind == "auto" else kind
+    if kind == "csv":
+        if len(sources) != 1:
+            raise ParameterError("CSV ingest takes one folder")
+        return read_csv_folder(sources[0], chans, points, **attrs)
+    if not chans:
+        raise ParameterError("UFF ingest needs the channels: a mapping file's [channels] or "
+                             "--channel NODE:DIR=NAME,LOCATION,ANGLE_DEG")
+    return read_uff_time(sources, chans, points, **attrs)
