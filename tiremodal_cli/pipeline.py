@@ -43,6 +43,9 @@ class RunOptions:
         below the FRF band's top
     exp_end : exponential window's value at the record's end (its damping is corrected)
     seed : seed of every evolutionary search
+    pressure_from_file : the model's inflation pressure P0 is the one the measurement
+        records (when it records one), not the nominal parameters' — a campaign over
+        pressures is then fitted at each test's own pressure
     """
 
     frf_top: float = 0.3125
@@ -52,6 +55,7 @@ class RunOptions:
     noise_floor_pct: float = 0.1
     max_effects: int = 2
     predict_n: int = 12
+    pressure_from_file: bool = True
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -83,6 +87,8 @@ class RunOptions:
                         raise ValueError(f"{k} must be > 0")
             if "frf_top" in kw and kw["frf_top"] > 0.5:
                 raise ValueError("frf_top must be ≤ 0.5 (a fraction of the sample rate)")
+            if "pressure_from_file" in kw and not isinstance(kw["pressure_from_file"], bool):
+                raise ValueError("pressure_from_file must be true or false")
             for k in ("seed", "max_effects", "predict_n"):
                 if k in kw:
                     if isinstance(kw[k], bool) or int(kw[k]) != kw[k]:
@@ -110,7 +116,8 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     measurement : path of a measurement file (docs/format.md)
     outdir : folder for the outputs (created; existing outputs are replaced)
     opt : RunOptions
-    params : nominal model parameters (default: the paper's, with a 1,000 kg rim + fixture)
+    params : nominal model parameters (default: the paper's, with a 1,000 kg rim + fixture);
+        P0 is replaced by the measurement's pressure (see RunOptions.pressure_from_file)
     progress : callable(stage: str) called as each stage starts, optional
     source : {"path", "kind", "sha256"} of what the measurement came from when it was
         ingested from a UFF/CSV folder (default: the measurement file itself); recorded in
@@ -131,6 +138,9 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
             raise DataFormatError(f"{measurement}: cannot read the records ({exc}); the file may be truncated") from None
         meta = {"tire": getattr(m, "tire", None), "inflation_pressure": getattr(m, "inflation_pressure", None),
                 "n_points": int(m.n_points), "n_hits": int(m.n_hits), "sample_rate": fs}
+    nominal = params
+    if opt.pressure_from_file and meta["inflation_pressure"] is not None and float(meta["inflation_pressure"]) > 0:
+        params = params.replace(P0=float(meta["inflation_pressure"]))
     sha = sha256_file(measurement)
     source = source or {"path": str(measurement), "kind": "measurement", "sha256": sha}
     write_frf(outdir / "frf.h5", r, input_file=str(source["path"]), input_sha256=sha, overwrite=True)
@@ -166,7 +176,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     names = list(OUTPUTS) + ([measurement.name] if measurement.parent.resolve() == outdir.resolve() else [])
     manifest = {"format": "tiremodal.run", "format_version": 1, "tiremodal_version": __version__,
                 "input_file": str(source["path"]), "input_sha256": sha, "source": source, "options": opt.to_dict(),
-                "params": params.to_dict(),
+                "params": nominal.to_dict(), "model_P0": params.P0,
                 "outputs": {name: sha256_file(outdir / name) for name in names}, "summary": summary}
     write_text_atomic(outdir / MANIFEST, _json(manifest), overwrite=True)
     return summary

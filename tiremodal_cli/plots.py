@@ -14,7 +14,8 @@ import numpy as np  # noqa: E402
 from .files import atomic_path  # noqa: E402
 
 __all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_shapes", "plot_synthesis",
-           "plot_dispersion", "plot_convergence", "plot_sensitivity", "plot_residuals"]
+           "plot_dispersion", "plot_convergence", "plot_sensitivity", "plot_residuals", "plot_campaign_parameters",
+           "plot_campaign_frequencies"]
 
 
 def save_figure(fig, path, *, overwrite: bool = False) -> None:
@@ -250,3 +251,63 @@ def plot_residuals(modes, *, axes=None):
     axes[0].set_ylabel("model − measured [%]")
     axes[1].legend(fontsize=8)
     return axes[0].figure
+
+
+def _campaign_axis(records):
+    """x values of a campaign's done tests: inflation pressure (kPa) when it varies, else
+    the test's position, labelled by name."""
+    ok = [r for r in records if r.get("status") in ("done", "skipped")]
+    p = [r.get("inflation_pressure") for r in ok]
+    if all(v is not None for v in p) and len(set(p)) > 1:
+        return ok, np.array(p, float) / 1e3, "inflation pressure [kPa]", None
+    return ok, np.arange(len(ok), dtype=float), "test", [r["test"] for r in ok]
+
+
+def plot_campaign_parameters(records):
+    """Identified parameters (± 1 standard error) across a batch's tests.
+
+    records : batch records (``summary.jsonl``) with ``identified`` {name: {value, std_error}}.
+    Returns the figure.
+    """
+    ok, x, xlabel, names = _campaign_axis(records)
+    params = []
+    for r in ok:
+        params += [k for k in (r.get("identified") or {}) if k not in params]
+    fig, axes = plt.subplots(1, max(len(params), 1), figsize=(4 * max(len(params), 1), 3.8), squeeze=False)
+    for ax, k in zip(axes[0], params):
+        v = np.array([((r.get("identified") or {}).get(k) or {}).get("value", np.nan) or np.nan for r in ok], float)
+        e = np.array([((r.get("identified") or {}).get(k) or {}).get("std_error", np.nan) or np.nan for r in ok], float)
+        ax.errorbar(x, v, yerr=np.where(np.isfinite(e), e, 0), fmt="o", capsize=3)
+        ax.set_title(k)
+        ax.set_xlabel(xlabel)
+        ax.grid(True, alpha=0.3)
+        if names is not None:
+            ax.set_xticks(x, names, rotation=60, ha="right", fontsize=7)
+    fig.suptitle("identified parameters across the tests (± 1 standard error)")
+    fig.tight_layout()
+    return fig
+
+
+def plot_campaign_frequencies(records):
+    """Measured frequency of each (n, branch) across a batch's tests, one line per mode.
+
+    records : batch records with ``modes`` [{n, branch, frequency_hz}]. Returns the figure.
+    """
+    ok, x, xlabel, names = _campaign_axis(records)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    for ax, br in zip(axes, ("same", "opposite")):
+        keys = sorted({m["n"] for r in ok for m in (r.get("modes") or []) if m["branch"] == br})
+        cmap = plt.get_cmap("viridis", max(len(keys), 2))
+        for i, n in enumerate(keys):
+            f = np.array([next((m["frequency_hz"] for m in (r.get("modes") or []) if m["n"] == n
+                                and m["branch"] == br), np.nan) for r in ok], float)
+            ax.plot(x, f, "o-", ms=3, color=cmap(i), label=f"n = {n}")
+        ax.set_title(f"{br} direction")
+        ax.set_xlabel(xlabel)
+        ax.grid(True, alpha=0.3)
+        if names is not None:
+            ax.set_xticks(x, names, rotation=60, ha="right", fontsize=7)
+    axes[0].set_ylabel("measured frequency [Hz]")
+    axes[1].legend(fontsize=6, ncol=2)
+    fig.tight_layout()
+    return fig

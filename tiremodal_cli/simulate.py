@@ -22,7 +22,7 @@ from .measurement import Measurement
 from .model import ModalModel, TyreParameters, frf, paper_damping, solve_modes
 
 __all__ = ["Channel", "Faults", "SimulationConfig", "Simulation", "simulate", "half_sine_spectrum",
-           "DEFAULT_CHANNELS"]
+           "DEFAULT_CHANNELS", "CAMPAIGN_CONFIG", "simulate_campaign"]
 
 
 @dataclass(frozen=True)
@@ -282,3 +282,33 @@ def _truth(cfg, modes: ModalModel, zeta, angles, keep, hits) -> dict:
         "point_angle_rad": [float(a) for a in angles],
         "modes": listed, "faults": faults, "hits": hits,
     }
+
+
+#: The sample's test set-up (``sample_data/gl073a_sim.toml``) without its faults: 34 points,
+#: 2 hits, 1 s records at 1,024 Hz, 0.5 % noise, a 2 ms pulse.
+CAMPAIGN_CONFIG = SimulationConfig(params=TyreParameters(m_w=1000.0), n_hits=2, sample_rate=1024.0,
+                                   n_samples=1024, pulse_width_s=0.002, noise=0.005)
+
+
+def simulate_campaign(folder, pressures_pa, *, repeats: int = 1, config: SimulationConfig = CAMPAIGN_CONFIG,
+                      seed: int = 0) -> list:
+    """Write a simulated campaign: one measurement file per pressure and repeat.
+
+    The tyre is ``config``'s at each inflation pressure P0 (the model's pre-tension
+    P0·b changes; nothing else does), each test with its own noise and hit jitter
+    (seed ``seed`` + its index). Files are ``FOLDER/p<kPa>_r<repeat>.h5``.
+
+    Returns the paths written.
+    """
+    from pathlib import Path
+
+    from .measurement import write_measurement
+
+    folder = Path(folder)
+    out = []
+    for i, (p0, r) in enumerate((p, r) for p in pressures_pa for r in range(repeats)):
+        cfg = dataclasses.replace(config, params=dataclasses.replace(config.params, P0=float(p0)), seed=seed + i)
+        path = folder / f"p{round(p0 / 1e3):04d}_r{r + 1}.h5"
+        write_measurement(path, simulate(cfg).measurement, overwrite=True)
+        out.append(path)
+    return out

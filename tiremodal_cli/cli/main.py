@@ -15,7 +15,7 @@ from .. import __version__
 from ..errors import TiremodalError
 
 _NO_ARGS = getattr(click.exceptions, "NoArgsIsHelpError", None)  # click ≥ 8.2
-COMMANDS = ("run", "simulate", "ingest", "info", "frf", "lsce", "mac", "predict", "identify", "diagnose",
+COMMANDS = ("run", "batch", "report", "simulate", "ingest", "info", "frf", "lsce", "mac", "predict", "identify", "diagnose",
             "sensitivity")
 
 
@@ -69,7 +69,8 @@ def cli(verbose, quiet):
 
 
 def _register():
-    from . import diagnose, frf, identify, info, ingest, lsce, mac, predict, run, sensitivity, simulate  # noqa: F401
+    from . import (batch, diagnose, frf, identify, info, ingest, lsce, mac, predict, run,  # noqa: F401
+                   sensitivity, simulate)
 
 
 _register()

@@ -24,10 +24,12 @@ from .options import echo_json, json_option, load_params, params_options
 @click.option("--seed", type=int, default=0, show_default=True)
 @click.option("--noise-floor-pct", type=click.FloatRange(0, 100, min_open=True), default=0.1, show_default=True)
 @click.option("--max-effects", type=click.IntRange(0, 5), default=2, show_default=True)
+@click.option("--p0-from-params", is_flag=True,
+              help="Model P0 from the parameters, not the inflation pressure the measurement records.")
 @click.option("--overwrite", is_flag=True, help="Replace the outputs of an earlier run in OUTDIR.")
 @json_option
 def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp_window, seed, noise_floor_pct,
-            max_effects, overwrite, as_json):
+            max_effects, p0_from_params, overwrite, as_json):
     """Run frf → lsce → identify → diagnose on MEASUREMENT, writing each stage into OUTDIR.
 
     Writes frf.h5, modal.h5, modes.csv, identify.json, diagnosis.json and, last, run.json
@@ -43,7 +45,7 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
     if "m_w" not in dict(p.split("=", 1)[0].strip() for p in param_items if "=" in p) and not params_file:
         base = base.replace(m_w=1000.0)
     opt = RunOptions(band=tuple(band) if band else None, exp_end=None if no_exp_window else exp_end, seed=seed,
-                     noise_floor_pct=noise_floor_pct, max_effects=max_effects)
+                     noise_floor_pct=noise_floor_pct, max_effects=max_effects, pressure_from_file=not p0_from_params)
     summary = run(measurement, outdir, opt, params=base, progress=lambda s: click.echo(f"run: {s} …", err=True))
     if as_json:
         echo_json(summary)
