@@ -40,7 +40,7 @@ from .ingest import test_folder_kind
 from .model import TyreParameters
 from .pipeline import RunOptions, is_complete, read_manifest, run
 
-__all__ = ["Test", "Job", "BatchConfig", "discover", "load_config", "plan", "run_one", "executor", "run_batch",
+__all__ = ["BatchTest", "Job", "BatchConfig", "discover", "load_config", "plan", "run_one", "executor", "run_batch",
            "summary_rows", "write_summary", "read_summary", "SUMMARY_CSV", "SUMMARY_JSONL", "PARTIAL"]
 
 SUMMARY_CSV = "summary.csv"
@@ -53,7 +53,7 @@ _OUTPUT_FORMATS = ("tiremodal.frf", "tiremodal.modal")
 
 
 @dataclass(frozen=True)
-class Test:
+class BatchTest:
     """One test: a measurement file (kind "measurement") or a UFF/CSV folder (kind "uff"/"csv").
 
     name : the output folder's name under OUTDIR (the path under its root, "/" → "__")
@@ -82,7 +82,7 @@ class BatchConfig:
 class Job:
     """What a worker needs to run one test (picklable: paths and frozen dataclasses)."""
 
-    test: Test
+    test: BatchTest
     outdir: Path
     partial: Path
     config: BatchConfig
@@ -104,7 +104,7 @@ def _is_output_file(path: Path) -> bool:
     return fmt in _OUTPUT_FORMATS
 
 
-def discover(roots: Sequence, *, exclude: Sequence = ()) -> list[Test]:
+def discover(roots: Sequence, *, exclude: Sequence = ()) -> list[BatchTest]:
     """Every test under ``roots`` (files or folders), in a stable order.
 
     A test is a measurement file (``*.h5``, ``*.hdf5``, ``*.hdf``; tiremodal's own FRF and
@@ -120,10 +120,10 @@ def discover(roots: Sequence, *, exclude: Sequence = ()) -> list[Test]:
     for root in roots:
         if not root.exists():
             raise ParameterError(f"{root}: no such file or folder")
-        prefix = [root.resolve().name] if len(roots) > 1 else []
         if root.is_file():
-            found.append(("__".join(prefix + [root.stem]) or root.stem, root, "measurement"))
+            found.append((root.stem, root, "measurement"))
             continue
+        prefix = [root.resolve().name] if len(roots) > 1 else []
         for folder, dirs, files in os.walk(root):
             folder = Path(folder)
             dirs[:] = sorted(d for d in dirs if not d.startswith(".") and (folder / d).resolve() not in excl)
@@ -141,11 +141,11 @@ def discover(roots: Sequence, *, exclude: Sequence = ()) -> list[Test]:
     for name, path, kind in found:
         k = seen.get(name, 0)
         seen[name] = k + 1
-        tests.append(Test(name if k == 0 else f"{name}-{k + 1}", path, kind))
+        tests.append(BatchTest(name if k == 0 else f"{name}-{k + 1}", path, kind))
     return tests
 
 
-def source_sha256(test: Test) -> str:
+def source_sha256(test: BatchTest) -> str:
     """Checksum of a test's input: the file's SHA-256, or for a folder the SHA-256 of its
     files' names and checksums (sorted), so any changed, added or removed file counts."""
     if test.kind == "measurement":
@@ -189,7 +189,7 @@ def load_config(path=None, *, run_overrides: dict | None = None, param_overrides
 
 # --------------------------------------------------------------------------- one test (in a worker)
 
-def _read_folder_test(test: Test, mapping_name: str):
+def _read_folder_test(test: BatchTest, mapping_name: str):
     """Ingest a UFF/CSV test folder; tyre and pressure from the mapping's optional [test]."""
     from .config import load_mapping
     from .ingest import read_source
@@ -250,7 +250,7 @@ def run_one(job: Job) -> dict:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def record(test: Test, status: str, *, outdir: Path | None = None, reason: str = "", seconds: float = 0.0) -> dict:
+def record(test: BatchTest, status: str, *, outdir: Path | None = None, reason: str = "", seconds: float = 0.0) -> dict:
     """One test's summary row (nested; :func:`summary_rows` flattens it for CSV).
 
     From a complete output folder: the manifest's summary and the measured modes (n, branch,
@@ -349,7 +349,7 @@ def _lock(outdir: Path):
         fh.close()
 
 
-def plan(tests: Sequence[Test], outdir: Path, config: BatchConfig, *, force: bool = False):
+def plan(tests: Sequence[BatchTest], outdir: Path, config: BatchConfig, *, force: bool = False):
     """Split the tests into jobs to run and records of tests already complete.
 
     Returns

@@ -42,6 +42,8 @@ class RunOptions:
     band : lsce band (Hz); default (0.04 fs, 0.293 fs): above the rim and rigid-body region,
         below the FRF band's top
     exp_end : exponential window's value at the record's end (its damping is corrected)
+    predict_n : predictions (and sensitivities) reach at least this order, and always two
+        beyond the highest measured one
     seed : seed of every evolutionary search
     pressure_from_file : the model's inflation pressure P0 is the one the measurement
         records (when it records one), not the nominal parameters' — a campaign over
@@ -154,14 +156,16 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     say("identify")
     modes, skipped = modes_from_rows(rows, source="modal.h5")
     res = fit(modes, params, FitOptions(seed=opt.seed))
-    ident = fit_report(res, skipped, predict_table(res, opt.predict_n, measured=res.modes))
+    # predictions reach the highest measured order and two beyond ("the higher orders")
+    n_pred = max([opt.predict_n] + [m["n"] + 2 for m in res.modes])
+    ident = fit_report(res, skipped, predict_table(res, n_pred, measured=res.modes))
     write_text_atomic(outdir / "identify.json", _json(ident), overwrite=True)
     say("diagnose")
     diag = diagnose(rows, params, DiagnoseOptions(seed=opt.seed, noise_floor_pct=opt.noise_floor_pct,
                                                   max_effects=opt.max_effects), n_points=int(table.point_angle.size))
-    rep = report(diag, opt.predict_n)
+    rep = report(diag, n_pred)
     write_text_atomic(outdir / "diagnosis.json", _json(rep), overwrite=True)
-    write_text_atomic(outdir / "sensitivity.json", _json(_sensitivity(diag.augmented, opt.predict_n)), overwrite=True)
+    write_text_atomic(outdir / "sensitivity.json", _json(_sensitivity(diag.augmented, n_pred)), overwrite=True)
     summary = {
         "measurement": str(source["path"]), **meta,
         "rejected_hits": [x.to_dict() for x in r.rejections],

@@ -15,7 +15,7 @@ from .files import atomic_path  # noqa: E402
 
 __all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_shapes", "plot_synthesis",
            "plot_dispersion", "plot_convergence", "plot_sensitivity", "plot_residuals", "plot_campaign_parameters",
-           "plot_campaign_frequencies"]
+           "plot_campaign_frequencies", "stabilization_figure", "automac_figure", "synthesis_figure", "mode_labels"]
 
 
 def save_figure(fig, path, *, overwrite: bool = False) -> None:
@@ -311,3 +311,54 @@ def plot_campaign_frequencies(records):
     axes[1].legend(fontsize=6, ncol=2)
     fig.tight_layout()
     return fig
+
+
+def mode_labels(table) -> list[str]:
+    """``"63.2 n3s"``: frequency, and order and branch where classified."""
+    return [f"{f:.1f}" + (f" n{n}{b[:1]}" if n >= 0 else "") for f, n, b in
+            zip(table.frequency_hz, table.n, table.branch)]
+
+
+def _band_lines(table, r):
+    if table.synthesis_freq_hz is not None:
+        lo, hi = table.synthesis_freq_hz[0], table.synthesis_freq_hz[-1]
+    else:
+        lo, hi = (table.meta or {}).get("band_hz", (r.freq_hz[0], r.freq_hz[-1]))
+    return (r.freq_hz >= lo - 1e-9) & (r.freq_hz <= hi + 1e-9)
+
+
+def stabilization_figure(table, r):
+    """The stabilization diagram over the mean FRF magnitude of the lsce band.
+
+    table : ModalTable ; r : FRFResult it came from. Returns the figure.
+    """
+    lines = _band_lines(table, r)
+    mag = np.nanmean(np.abs(r.H[..., lines]).reshape(-1, lines.sum()), axis=0)
+    return plot_stabilization(table, H_freq=r.freq_hz[lines], H_mag=mag).figure
+
+
+def automac_figure(table):
+    """AutoMAC of the modes' shapes (all channels and points stacked). Returns the figure."""
+    from .mac import mac_matrix
+
+    flat = np.nan_to_num(table.shapes.reshape(table.n_modes, -1))
+    labels = mode_labels(table)
+    return plot_mac(mac_matrix(flat), labels_a=labels, labels_b=labels, title="AutoMAC").figure
+
+
+def synthesis_figure(table, r, *, points=None, n_channels: int = 2):
+    """Measured FRFs against the modal model's re-synthesis (the table's ``synthesis``).
+
+    points : point indices (default the first and the one a quarter round). Returns the figure.
+    Raises ValueError when the table holds no synthesis (a modal file from before it did).
+    """
+    if table.synthesis is None:
+        raise ValueError("the modal file holds no re-synthesised FRFs; re-run lsce")
+    lines = _band_lines(table, r)
+    n_p = r.H.shape[1]
+    points = sorted({0, n_p // 4}) if points is None else list(points)
+    live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels][:n_channels]
+    H = np.array([r.H[c, p][lines] for c in live for p in points])
+    S = np.array([table.synthesis[c, p] for c in live for p in points])
+    labels = [f"{r.channel_name[c]} / point {p + 1}" for c in live for p in points]
+    return plot_synthesis(r.freq_hz[lines], H, S, labels=labels).figure

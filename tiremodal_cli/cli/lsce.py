@@ -71,7 +71,7 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, 
     write_modal(output, table, input_file=str(frf_file), input_sha256=sha256_file(frf_file), overwrite=overwrite)
     if csv_out:
         write_text_atomic(csv_out, to_csv(table), overwrite=overwrite)
-    _plots(table, res, r, plot_stabilization, plot_mac, plot_shapes, plot_synthesis, overwrite)
+    _plots(table, r, plot_stabilization, plot_mac, plot_shapes, plot_synthesis, overwrite)
     rows = to_rows(table)
     if as_json:
         echo_json({"modes": rows, "clusters": table.clusters, "rejected_modes": table.rejected,
@@ -87,30 +87,10 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, 
                        f"{row.get('n_confidence', float('nan')):5.2f}")
 
 
-def _plots(table, res, r, stab, macp, shapes, synth, overwrite):
-    if not any((stab, macp, shapes, synth)):
-        return
-    from ..mac import mac_matrix
-    from ..plots import plot_mac, plot_shapes, plot_stabilization, plot_synthesis, save_figure
+def _plots(table, r, stab, macp, shapes, synth, overwrite):
+    from ..plots import automac_figure, plot_shapes, save_figure, stabilization_figure, synthesis_figure
 
-    lines = (r.freq_hz >= res.band_freq_hz[0] - 1e-9) & (r.freq_hz <= res.band_freq_hz[-1] + 1e-9)
-    if stab:
-        mag = np.nanmean(np.abs(r.H[..., lines]).reshape(-1, lines.sum()), axis=0)
-        ax = plot_stabilization(table, H_freq=r.freq_hz[lines], H_mag=mag)
-        save_figure(ax.figure, stab, overwrite=overwrite)
-    if macp:
-        flat = np.nan_to_num(table.shapes.reshape(table.n_modes, -1))
-        labels = [f"{f:.1f}" + (f" n{n}{b[:1]}" if n >= 0 else "") for f, n, b in
-                  zip(table.frequency_hz, table.n, table.branch)]
-        ax = plot_mac(mac_matrix(flat), labels_a=labels, labels_b=labels, title="AutoMAC")
-        save_figure(ax.figure, macp, overwrite=overwrite)
-    if shapes:
-        save_figure(plot_shapes(table), shapes, overwrite=overwrite)
-    if synth:
-        k = [0, min(1, r.H.shape[1] - 1)]
-        live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels]
-        H = np.array([r.H[c, p][lines] for c in live[:2] for p in k])
-        S = np.array([res.synthesis[c, p] for c in live[:2] for p in k])
-        labels = [f"{r.channel_name[c]} / point {p + 1}" for c in live[:2] for p in k]
-        ax = plot_synthesis(res.band_freq_hz, H, S, labels=labels)
-        save_figure(ax.figure, synth, overwrite=overwrite)
+    for path, make in ((stab, lambda: stabilization_figure(table, r)), (macp, lambda: automac_figure(table)),
+                       (shapes, lambda: plot_shapes(table)), (synth, lambda: synthesis_figure(table, r))):
+        if path:
+            save_figure(make(), path, overwrite=overwrite)

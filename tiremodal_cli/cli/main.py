@@ -69,8 +69,8 @@ def cli(verbose, quiet):
 
 
 def _register():
-    from . import (batch, diagnose, frf, identify, info, ingest, lsce, mac, predict, run,  # noqa: F401
-                   sensitivity, simulate)
+    from . import (batch, diagnose, frf, identify, info, ingest, lsce, mac, predict, report,  # noqa: F401
+                   run, sensitivity, simulate)
 
 
 _register()

@@ -1,0 +1,141 @@
+"""``tiremodal report``: the sample's report opens with every figure present and decodable."""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+import xml.etree.ElementTree as ET
+from html.parser import HTMLParser
+from pathlib import Path
+
+import matplotlib.image as mpimg
+import numpy as np
+import pytest
+
+from tiremodal_cli.batch import load_config, run_batch
+from tiremodal_cli.errors import DataFormatError
+from tiremodal_cli.pipeline import run
+from tiremodal_cli.report import FIGURES, report
+from tiremodal_cli.simulate import simulate_campaign
+
+from conftest import run_cli
+
+SAMPLE = Path(__file__).resolve().parents[1] / "sample_data" / "gl073a_sim.h5"
+
+
+class _Page(HTMLParser):
+    """Images, headings, links, table rows and any external reference of a page."""
+
+    def __init__(self):
+        super().__init__()
+        self.images, self.headings, self.links, self.external, self.rows = [], [], [], [], 0
+        self._h = None
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "img":
+            self.images.append(a.get("src", ""))
+        if tag == "a":
+            self.links.append(a.get("href", ""))
+        if tag == "tr":
+            self.rows += 1
+        if tag in ("script", "link", "iframe") or any(
+                k in ("src", "href") and v and v.startswith(("http:", "https:", "//", "file:"))
+                for k, v in attrs):
+            self.external.append((tag, attrs))
+        if tag in ("h1", "h2", "h3"):
+            self._h = ""
+
+    def handle_data(self, data):
+        if self._h is not None:
+            self._h += data
+
+    def handle_endtag(self, tag):
+        if tag in ("h1", "h2", "h3") and self._h is not None:
+            self.headings.append(self._h.strip())
+            self._h = None
+
+
+def _parse(path: Path) -> _Page:
+    p = _Page()
+    p.feed(path.read_text(encoding="utf-8"))
+    return p
+
+
+def _decode_png(src: str) -> np.ndarray:
+    head, b64 = src.split(",", 1)
+    assert head == "data:image/png;base64"
+    return mpimg.imread(io.BytesIO(base64.b64decode(b64, validate=True)), format="png")
+
+
+@pytest.fixture(scope="module")
+def sample_run(tmp_path_factory):
+    """The README's main job on the sample (the whole pipeline, default options), reported."""
+    out = tmp_path_factory.mktemp("report") / "gl073a"
+    summary = run(SAMPLE, out)
+    res = run_cli(["report", out])
+    assert res.exit_code == 0, res.output
+    return out, summary
+
+
+def test_sample_report_has_every_figure(sample_run):
+    out, summary = sample_run
+    page = _parse(out / "report.html")
+    assert len(page.images) == len(FIGURES)
+    for src in page.images:
+        img = _decode_png(src)
+        assert img.ndim == 3 and img.shape[0] > 200 and img.shape[1] > 300
+        assert img[..., :3].std() > 0.01  # not a blank canvas
+    assert page.external == []  # self-contained
+    for stem, _ in FIGURES:
+        png = mpimg.imread(out / "figures" / f"{stem}.png")
+        assert png.shape[0] > 200
+        root = ET.parse(out / "figures" / f"{stem}.svg").getroot()
+        assert root.tag.endswith("svg")
+    for title in ("Test", "Rejected hits (2)", "FRFs and coherence", "Stabilization diagram", "Modal table",
+                  "MAC matrix", "Mode shapes", "Measured against synthesised FRFs", "Model identification",
+                  "Residual diagnosis", "Candidates", "Predictions", "Parameter sensitivity"):
+        assert title in page.headings, title
+    text = (out / "report.html").read_text(encoding="utf-8")
+    assert "double hit" in text and "clipped (overloaded) response" in text  # the sample's two bad hits
+    assert "sidewall_membrane" in text and summary["verdict"].split(":")[0] in text
+    # the modal table lists every mode of modes.csv
+    n_modes = len((out / "modes.csv").read_text().splitlines()) - 1
+    assert n_modes == summary["modes_found"] and f"<td>{n_modes}</td>" in text
+
+
+def test_predictions_reach_beyond_the_measured_orders(sample_run):
+    out, _ = sample_run
+    d = json.loads((out / "diagnosis.json").read_text())
+    n_meas = max(m["n"] for m in d["modes"])
+    assert max(p["n"] for p in d["predictions"]["augmented"]) == max(12, n_meas + 2)
+
+
+def test_batch_index_links_every_report(tmp_path):
+    tree = tmp_path / "tree"
+    simulate_campaign(tree, [7e5, 9e5], seed=7)
+    (tree / "broken.h5").write_bytes(b"\x89HDF\r\n\x1a\n" + bytes(100))
+    out = tmp_path / "out"
+    recs = run_batch([tree], out, load_config(None, run_overrides={"max_effects": 0}))
+    assert [r["status"] for r in recs] == ["failed", "done", "done"]
+    res = run_cli(["report", out, "--json"])
+    assert res.exit_code == 0, res.output
+    pages = [Path(p) for p in json.loads(res.stdout)["pages"]]
+    assert pages[-1] == out / "index.html" and len(pages) == 3
+    index = _parse(out / "index.html")
+    assert sorted(index.links) == ["p0700_r1/report.html", "p0900_r1/report.html"]
+    assert all((out / link).is_file() for link in index.links)
+    assert index.rows == 4 and len(index.images) == 2 and index.external == []
+    for src in index.images:
+        assert _decode_png(src).shape[0] > 200
+    assert "not a readable HDF5 file" in (out / "index.html").read_text()
+    assert (out / "figures" / "campaign_parameters.svg").is_file()
+
+
+def test_report_of_a_folder_that_is_not_a_run(tmp_path):
+    with pytest.raises(DataFormatError, match="neither a run folder"):
+        report(tmp_path)
+    res = run_cli(["report", tmp_path / "nope"])
+    assert res.exit_code == 2
+    assert res.stderr.strip() == f"Error: {tmp_path / 'nope'}: no such folder"

@@ -1,0 +1,354 @@
+"""``report``: a self-contained HTML page per test, and an index page for a batch.
+
+A run folder (``run.json`` and the stage outputs) becomes ``report.html`` — every figure
+embedded as a base64 PNG, the styles inline, no link outside the file — and the same
+figures as PNG and SVG files in ``figures/``. A batch folder (``summary.jsonl``) gets a
+report for each test that has outputs and an ``index.html``: the campaign table with each
+test's status or reason, links to the tests' reports, and the campaign figures.
+
+Figures come from :mod:`tiremodal_cli.plots`; this module only reads the outputs, lays
+them out and writes (atomically: the figure folder is built aside and renamed into place).
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .errors import DataFormatError
+from .files import _UMASK, write_text_atomic
+from .pipeline import MANIFEST, read_manifest
+
+__all__ = ["FIGURES", "report_run", "report_batch", "report", "REPORT_HTML", "INDEX_HTML"]
+
+REPORT_HTML = "report.html"
+INDEX_HTML = "index.html"
+FIGURE_DIR = "figures"
+
+#: The figures of a test's report, in page order: (file stem, caption).
+FIGURES = (
+    ("frf", "FRFs of two impact points with their coherence (accepted hits averaged, H1)."),
+    ("stabilization", "Stabilization diagram: candidate poles by model order; adopted modes as lines."),
+    ("mac", "AutoMAC of the mode shapes (tread, sidewall and rim residues at every point)."),
+    ("shapes", "Mode shapes around the tyre: tread (blue) and sidewall (red), over the undeformed circle."),
+    ("synthesis", "Measured FRFs (solid) against the modal model's re-synthesis (dashed)."),
+    ("fit", "The identified model's frequencies against n (band: ± 2σ) with the measured modes."),
+    ("convergence", "Evolutionary search: best RMS frequency error per generation."),
+    ("residuals", "Frequency error of each mode before (base model) and after the diagnosis."),
+    ("predictions", "Predicted frequencies of the final model to higher orders, with the measured ones."),
+    ("sensitivity", "Normalised sensitivities ∂ln f/∂ln p of the final model at its parameters."),
+)
+
+_CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:2em auto;max-width:1100px;
+color:#222;line-height:1.4;padding:0 1em}
+h1{font-size:1.5em;border-bottom:2px solid #345;padding-bottom:.2em}h2{font-size:1.2em;margin-top:1.6em;color:#345}
+table{border-collapse:collapse;font-size:.85em;margin:.5em 0}td,th{border:1px solid #ccc;padding:.2em .5em;
+text-align:right}th{background:#eef2f6}td.l,th.l{text-align:left}figure{margin:1em 0}
+figure img{max-width:100%;border:1px solid #ddd}figcaption{font-size:.85em;color:#555}
+.ok{color:#161}.bad{color:#a11}.muted{color:#777;font-size:.85em}
+"""
+
+
+def _e(x) -> str:
+    return html.escape("" if x is None else str(x))
+
+
+def _num(v, fmt="{:.4g}") -> str:
+    if v is None or (isinstance(v, float) and not np.isfinite(v)):
+        return ""
+    return fmt.format(v) if isinstance(v, (int, float)) else _e(v)
+
+
+def _table(rows: list[dict], cols: list[tuple[str, str]], *, left=()) -> str:
+    """An HTML table of dict rows; cols = [(key, heading)]; ``left`` columns left-aligned."""
+    def cell(tag, k, v):
+        return f'<{tag} class="l">{v}</{tag}>' if k in left else f"<{tag}>{v}</{tag}>"
+
+    def text(v):
+        return _e(v) if isinstance(v, str) else _num(v)
+    head = "".join(cell("th", k, _e(h)) for k, h in cols)
+    body = "".join("<tr>" + "".join(cell("td", k, text(r.get(k))) for k, _ in cols) + "</tr>" for r in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def _page(title: str, body: str) -> str:
+    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title>'
+            f"<style>{_CSS}</style></head><body>\n{body}\n"
+            f'<p class="muted">tiremodal {_e(__version__)}</p></body></html>\n')
+
+
+def _render(fig, folder: Path, stem: str) -> bytes:
+    """Save ``fig`` as folder/stem.png and .svg; return the PNG bytes (for embedding)."""
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    png = buf.getvalue()
+    (folder / f"{stem}.png").write_bytes(png)
+    fig.savefig(folder / f"{stem}.svg", format="svg")
+    plt.close(fig)
+    return png
+
+
+def _img(png: bytes, caption: str) -> str:
+    b64 = base64.b64encode(png).decode("ascii")
+    return (f'<figure><img alt="{_e(caption)}" src="data:image/png;base64,{b64}">'
+            f"<figcaption>{_e(caption)}</figcaption></figure>")
+
+
+def _install_dir(tmp: Path, final: Path) -> None:
+    """Rename a finished folder into place (the old one moved aside first, then removed)."""
+    old = None
+    if final.exists():
+        old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old.", dir=final.parent))
+        os.replace(final, old / "x")
+    os.replace(tmp, final)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def _load_json(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise DataFormatError(f"{path}: missing; the run folder is incomplete (re-run it)") from None
+    except ValueError as exc:
+        raise DataFormatError(f"{path}: not JSON ({exc})") from None
+
+
+def _figures(folder: Path, man: dict, ident: dict, diag: dict, sens: dict) -> dict[str, Callable]:
+    """Callables making each figure of :data:`FIGURES` from the run folder's outputs."""
+    from . import plots
+    from .frffile import read_frf
+    from .modalfile import read_modal
+
+    r = read_frf(folder / "frf.h5")
+    table = read_modal(folder / "modal.h5")
+    n_p = r.point_angle.size
+
+    def fit():
+        ax = plots.plot_dispersion(ident["predictions"], measured=ident["modes"])
+        ax.set_title(f"identified model (RMS error {ident['rms_error_pct']:.3f} %)")
+        return ax.figure
+
+    def predictions():
+        aug = diag["predictions"]["augmented"]
+        ax = plots.plot_dispersion(aug, measured=[{"n": m["n"], "branch": m["branch"], "measured_hz": m["measured_hz"]}
+                                                  for m in diag["modes"]])
+        ax.set_title("final model: " + (", ".join(diag["adopted_effects"] + diag["parameter_off"]) or "no effect added"))
+        return ax.figure
+
+    def sensitivity():
+        c = sens["coefficients"]
+        S = np.array([[row[k] for k in sens["names"]] for row in c])
+        return plots.plot_sensitivity([row["n"] for row in c], [row["branch"] for row in c], S,
+                                      sens["names"])[0].figure
+
+    return {
+        "frf": lambda: plots.plot_frf(r, points=sorted({0, n_p // 4}))[0].figure,
+        "stabilization": lambda: plots.stabilization_figure(table, r),
+        "mac": lambda: plots.automac_figure(table),
+        "shapes": lambda: plots.plot_shapes(table),
+        "synthesis": lambda: plots.synthesis_figure(table, r),
+        "fit": fit,
+        "convergence": lambda: plots.plot_convergence([(h["generation"], h["rms_error_pct"] / 100)
+                                                       for h in ident["history"]]).figure,
+        "residuals": lambda: plots.plot_residuals(diag["modes"]),
+        "predictions": predictions,
+        "sensitivity": sensitivity,
+    }
+
+
+def report_run(folder, *, progress: Callable[[str], None] | None = None) -> Path:
+    """Write ``folder/report.html`` and ``folder/figures/*.png|svg`` for one run folder.
+
+    Returns the report's path. Raises DataFormatError when the folder is not a complete run.
+    """
+    folder = Path(folder)
+    man = read_manifest(folder)
+    if man is None or man.get("format") != "tiremodal.run":
+        raise DataFormatError(f"{folder}: no run manifest ({MANIFEST}); run 'tiremodal run' or 'batch' first")
+    ident = _load_json(folder / "identify.json")
+    diag = _load_json(folder / "diagnosis.json")
+    sens = _load_json(folder / "sensitivity.json")
+    makers = _figures(folder, man, ident, diag, sens)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{FIGURE_DIR}.", dir=folder))
+    os.chmod(tmp, 0o777 & ~_UMASK)
+    try:
+        pngs = {}
+        for stem, _ in FIGURES:
+            if progress:
+                progress(stem)
+            pngs[stem] = _render(makers[stem](), tmp, stem)
+        html_text = _page(f"tiremodal report: {man['summary']['measurement']}", _run_body(folder, man, ident, diag, pngs))
+        _install_dir(tmp, folder / FIGURE_DIR)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return write_text_atomic(folder / REPORT_HTML, html_text, overwrite=True)
+
+
+def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> str:
+    s = man["summary"]
+    cap = dict(FIGURES)
+    fig = (lambda k: _img(pngs[k], cap[k]))
+    p_kpa = None if s.get("inflation_pressure") is None else s["inflation_pressure"] / 1e3
+    facts = [("measurement", s["measurement"]), ("tyre", s.get("tire")),
+             ("inflation pressure", None if p_kpa is None else f"{p_kpa:g} kPa"),
+             ("impact points × hits", f"{s['n_points']} × {s['n_hits']}"),
+             ("sample rate", f"{s['sample_rate']:g} Hz"), ("modes found", s["modes_found"]),
+             ("model P0", f"{man.get('model_P0', man['params']['P0']) / 1e3:g} kPa"),
+             ("input SHA-256", man["input_sha256"][:16] + "…")]
+    out = [f"<h1>Modal test report — {_e(Path(s['measurement']).name)}</h1>",
+           f"<p><b>Diagnosis:</b> {_e(s['verdict'])}</p>",
+           "<h2>Test</h2>", _table([{"k": k, "v": v} for k, v in facts], [("k", ""), ("v", "")], left=("k", "v"))]
+    rej = s.get("rejected_hits") or []
+    out.append(f"<h2>Rejected hits ({len(rej)})</h2>")
+    out.append(_table([{**x, "point": x.get("point", 0) + 1, "hit": x.get("hit", 0) + 1} for x in rej],
+                      [("point", "point"), ("hit", "hit"), ("channel", "channel"), ("reason", "reason")],
+                      left=("channel", "reason")) if rej else "<p>None: every hit passed the checks.</p>")
+    out += ["<h2>FRFs and coherence</h2>", fig("frf"), "<h2>Stabilization diagram</h2>", fig("stabilization")]
+    modes = _modes_rows(folder)
+    out += ["<h2>Modal table</h2>", _table(modes, [("mode", "mode"), ("frequency_hz", "f [Hz]"),
+                                                   ("damping_pct", "ζ [%]"), ("n", "n"), ("branch", "branch"),
+                                                   ("n_confidence", "n conf."), ("mpc", "MPC"),
+                                                   ("frequency_uncertainty_hz", "σf [Hz]")], left=("branch",))]
+    out += ["<h2>MAC matrix</h2>", fig("mac"), "<h2>Mode shapes</h2>", fig("shapes"),
+            "<h2>Measured against synthesised FRFs</h2>", fig("synthesis")]
+    par = [{"name": k, "value": v["value"], "std_error": v["std_error"],
+            "rel": 100 * v["std_error"] / abs(v["value"]) if v["value"] else None} for k, v in ident["parameters"].items()]
+    out += ["<h2>Model identification</h2>",
+            f"<p>RMS frequency error {ident['rms_error_pct']:.3f} %, max {ident['max_error_pct']:.3f} % over "
+            f"{len(ident['modes'])} modes.</p>",
+            _table(par, [("name", "parameter"), ("value", "value"), ("std_error", "std. error"), ("rel", "rel. [%]")],
+                   left=("name",))]
+    if ident.get("undetermined"):
+        out.append("<p>Not determined by these data: " + "; ".join(f"{_e(k)} ({_e(v)})"
+                                                                   for k, v in ident["undetermined"].items()) + "</p>")
+    out += [fig("fit"), fig("convergence")]
+    before, after = diag["residual_before"], diag["residual_after"]
+    out += ["<h2>Residual diagnosis</h2>", f"<p>{_e(diag['verdict'])}</p>",
+            _table([{"k": "before", "rms": before["rms_error_pct"], "max": before["max_error_pct"],
+                     "chi2": before["chi2"], "dof": before["dof"], "p": before["p_value"]},
+                    {"k": "after", "rms": after["rms_error_pct"], "max": after["max_error_pct"],
+                     "chi2": after["chi2"], "dof": after["dof"], "p": after["p_value"]}],
+                   [("k", ""), ("rms", "RMS error [%]"), ("max", "max error [%]"), ("chi2", "χ²"), ("dof", "dof"),
+                    ("p", "p")], left=("k",)),
+            fig("residuals"), "<h3>Candidates</h3>",
+            _table([{**c, "adopted": "yes" if c["adopted"] else ""} for c in diag["candidates"]],
+                   [("name", "candidate"), ("round", "round"), ("rms_error_pct", "RMS [%]"), ("aicc", "ΔAICc"),
+                    ("f_p_value", "F-test p"), ("adopted", "adopted"), ("reason", "reason")],
+                   left=("name", "adopted", "reason"))]
+    if diag.get("unexplained_modes"):
+        out += ["<h3>Modes no (n, branch) explains</h3>",
+                _table(diag["unexplained_modes"], [("frequency_hz", "f [Hz]"), ("n", "n"), ("reason", "reason")],
+                       left=("reason",))]
+    preds = diag["predictions"]["augmented"]
+    out += ["<h2>Predictions</h2>", fig("predictions"),
+            _table([{**p, "measured": "" if p.get("measured") is None else p["measured"]} for p in preds],
+                   [("n", "n"), ("branch", "branch"), ("model_hz", "model [Hz]"), ("std_hz", "σ [Hz]"),
+                    ("measured", "measured [Hz]")], left=("branch",)),
+            "<h2>Parameter sensitivity</h2>", fig("sensitivity")]
+    return "\n".join(out)
+
+
+def _modes_rows(folder: Path) -> list[dict]:
+    """The modal table (``modes.csv``) as rows for the page."""
+    from .modalfile import read_modal_csv
+
+    rows = read_modal_csv(folder / "modes.csv")
+    out = []
+    for r in rows:
+        def f(k):
+            try:
+                return float(r[k]) if r.get(k) not in (None, "") else None
+            except ValueError:
+                return None
+        out.append({"mode": int(r["mode"]), "frequency_hz": f("frequency_hz"),
+                    "damping_pct": None if f("damping_ratio") is None else 100 * f("damping_ratio"),
+                    "n": None if r.get("n") in (None, "") else int(r["n"]), "branch": r.get("branch", ""),
+                    "n_confidence": f("n_confidence"), "mpc": f("mpc"),
+                    "frequency_uncertainty_hz": f("frequency_uncertainty_hz")})
+    return out
+
+
+def report_batch(outdir, *, progress: Callable[[str, int, int], None] | None = None) -> Path:
+    """Reports for every test of a batch folder with outputs, and ``index.html``.
+
+    progress : callable(test name, done, total), optional. Returns the index's path.
+    """
+    from .batch import read_summary
+    from .plots import plot_campaign_frequencies, plot_campaign_parameters
+
+    outdir = Path(outdir)
+    recs = read_summary(outdir)
+    with_outputs = [r for r in recs if r["status"] in ("done", "skipped") and r.get("output")]
+    links = {}
+    for i, r in enumerate(with_outputs):
+        folder = outdir / Path(r["output"]).name
+        report_run(folder)
+        links[r["test"]] = f"{folder.name}/{REPORT_HTML}"
+        if progress:
+            progress(r["test"], i + 1, len(with_outputs))
+    figs = []
+    if with_outputs:
+        tmp = Path(tempfile.mkdtemp(prefix=f".{FIGURE_DIR}.", dir=outdir))
+        os.chmod(tmp, 0o777 & ~_UMASK)
+        try:
+            figs = [(_render(plot_campaign_parameters(recs), tmp, "campaign_parameters"),
+                     "Identified parameters across the tests (± 1 standard error)."),
+                    (_render(plot_campaign_frequencies(recs), tmp, "campaign_frequencies"),
+                     "Measured frequency of each (n, branch) across the tests.")]
+            _install_dir(tmp, outdir / FIGURE_DIR)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+    n = {k: sum(r["status"] == k for r in recs) for k in ("done", "skipped", "failed")}
+    rows = []
+    for r in recs:
+        name = (f'<a href="{_e(links[r["test"]])}">{_e(r["test"])}</a>' if r["test"] in links else _e(r["test"]))
+        cls = "bad" if r["status"] == "failed" else "ok"
+        p = r.get("inflation_pressure")
+        rows.append("<tr>" + "".join([
+            f'<td class="l">{name}</td>', f'<td class="l {cls}">{_e(r["status"])}</td>',
+            f"<td>{_num(None if p is None else p / 1e3, '{:g}')}</td>", f"<td>{_num(r.get('modes_found'))}</td>",
+            f"<td>{_num(r.get('rms_before_pct'), '{:.3f}')}</td>", f"<td>{_num(r.get('rms_after_pct'), '{:.3f}')}</td>",
+            f'<td class="l">{_e(", ".join((r.get("adopted_effects") or []) + (r.get("parameter_off") or [])))}</td>',
+            f'<td class="l">{_e(r.get("reason"))}</td>']) + "</tr>")
+    head = "".join(f'<th class="{c}">{h}</th>' for h, c in (
+        ("test", "l"), ("status", "l"), ("pressure [kPa]", ""), ("modes", ""), ("RMS before [%]", ""),
+        ("RMS after [%]", ""), ("added to the model", "l"), ("reason", "l")))
+    body = [f"<h1>Campaign report — {_e(outdir.resolve().name)}</h1>",
+            f"<p>{len(recs)} tests: {n['done'] + n['skipped']} with outputs, {n['failed']} failed.</p>",
+            f"<table><tr>{head}</tr>{''.join(rows)}</table>"]
+    body += [_img(png, cap) for png, cap in figs]
+    return write_text_atomic(outdir / INDEX_HTML, _page(f"tiremodal campaign: {outdir.name}", "\n".join(body)),
+                             overwrite=True)
+
+
+def report(outdir, *, progress=None) -> list[Path]:
+    """Report a run folder (``run.json``) or a batch folder (``summary.jsonl``); return
+    the HTML pages written (the index last for a batch)."""
+    from .batch import SUMMARY_JSONL
+
+    outdir = Path(outdir)
+    if (outdir / MANIFEST).is_file():
+        return [report_run(outdir)]
+    if (outdir / SUMMARY_JSONL).is_file():
+        index = report_batch(outdir, progress=progress)
+        pages = sorted(outdir.glob(f"*/{REPORT_HTML}"))
+        return pages + [index]
+    if not outdir.is_dir():
+        raise DataFormatError(f"{outdir}: no such folder")
+    raise DataFormatError(f"{outdir}: neither a run folder ({MANIFEST}) nor a batch folder ({SUMMARY_JSONL})")
