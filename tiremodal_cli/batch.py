@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .errors import DataFormatError, ParameterError, TiremodalError
-from .files import _UMASK, dumps, sha256_file, write_text_atomic
+from .files import _UMASK, dumps, install_dir, sha256_file, write_text_atomic
 from .ingest import test_folder_kind
 from .model import TyreParameters
 from .pipeline import RunOptions, is_complete, read_manifest, run
@@ -204,18 +204,6 @@ def _read_folder_test(test: BatchTest, mapping_name: str):
                        description=f"ingested from {test.kind}: {test.path}")
 
 
-def _install(tmp: Path, final: Path, partial: Path) -> None:
-    """Put a finished folder in place: the old one (if any) is moved aside first, so at
-    every instant ``final`` is either the old complete folder, absent, or the new one."""
-    old = None
-    if final.exists():
-        old = Path(tempfile.mkdtemp(prefix=f"{final.name}.old.", dir=partial))
-        os.replace(final, old / "x")
-    os.replace(tmp, final)
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
-
-
 def run_one(job: Job) -> dict:
     """Run one test in a private folder and install it; never raises for a test's failure.
 
@@ -239,7 +227,7 @@ def run_one(job: Job) -> dict:
                 write_measurement(meas, _read_folder_test(job.test, job.config.mapping))
             run(meas, tmp, job.config.run, params=job.config.params,
                 source={"path": str(job.test.path), "kind": job.test.kind, "sha256": job.source_sha256})
-        _install(tmp, job.outdir, job.partial)
+        install_dir(tmp, job.outdir, aside=job.partial)
         return record(job.test, "done", outdir=job.outdir, seconds=time.perf_counter() - t0)
     except TiremodalError as exc:
         return record(job.test, "failed", reason=str(exc), seconds=time.perf_counter() - t0)

@@ -25,7 +25,7 @@ def _umask() -> int:
 
 _UMASK = _umask()
 
-__all__ = ["atomic_path", "check_overwrite", "dumps", "sha256_file", "write_text_atomic"]
+__all__ = ["atomic_path", "check_overwrite", "dumps", "install_dir", "sha256_file", "write_text_atomic"]
 
 
 def check_overwrite(path: str | os.PathLike, overwrite: bool) -> Path:
@@ -59,6 +59,23 @@ def atomic_path(target: str | os.PathLike, *, overwrite: bool = False) -> Iterat
         with contextlib.suppress(FileNotFoundError):
             tmp_path.unlink()
         raise
+
+
+def install_dir(tmp: str | os.PathLike, final: str | os.PathLike, *, aside: str | os.PathLike | None = None) -> Path:
+    """Rename the finished folder ``tmp`` to ``final``. An existing ``final`` is first moved
+    into a fresh folder under ``aside`` (default: beside it) and removed after, so at every
+    instant ``final`` is the old complete folder, absent, or the new one — never a mix."""
+    import shutil
+
+    tmp, final = Path(tmp), Path(final)
+    old = None
+    if final.exists():
+        old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old.", dir=aside or final.parent))
+        os.replace(final, old / "x")
+    os.replace(tmp, final)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+    return final
 
 
 def write_text_atomic(target: str | os.PathLike, text: str, *, overwrite: bool = False) -> Path:

@@ -26,7 +26,7 @@ import numpy as np
 
 from . import __version__
 from .errors import DataFormatError
-from .files import _UMASK, write_text_atomic
+from .files import _UMASK, install_dir, write_text_atomic
 from .pipeline import MANIFEST, read_manifest
 
 __all__ = ["FIGURES", "report_run", "report_batch", "report", "REPORT_HTML", "INDEX_HTML"]
@@ -107,17 +107,6 @@ def _img(png: bytes, caption: str) -> str:
             f"<figcaption>{_e(caption)}</figcaption></figure>")
 
 
-def _install_dir(tmp: Path, final: Path) -> None:
-    """Rename a finished folder into place (the old one moved aside first, then removed)."""
-    old = None
-    if final.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old.", dir=final.parent))
-        os.replace(final, old / "x")
-    os.replace(tmp, final)
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
-
-
 def _load_json(path: Path) -> dict:
     try:
         return json.loads(path.read_text(encoding="utf-8"))
@@ -192,7 +181,7 @@ def report_run(folder, *, progress: Callable[[str], None] | None = None) -> Path
                 progress(stem)
             pngs[stem] = _render(makers[stem](), tmp, stem)
         html_text = _page(f"tiremodal report: {man['summary']['measurement']}", _run_body(folder, man, ident, diag, pngs))
-        _install_dir(tmp, folder / FIGURE_DIR)
+        install_dir(tmp, folder / FIGURE_DIR)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -310,7 +299,7 @@ def report_batch(outdir, *, progress: Callable[[str, int, int], None] | None = N
                      "Identified parameters across the tests (± 1 standard error)."),
                     (_render(plot_campaign_frequencies(recs), tmp, "campaign_frequencies"),
                      "Measured frequency of each (n, branch) across the tests.")]
-            _install_dir(tmp, outdir / FIGURE_DIR)
+            install_dir(tmp, outdir / FIGURE_DIR)
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
