@@ -158,26 +158,35 @@ def test_rerun_skips_complete_and_force_redoes(campaign):
     assert r5[0]["status"] == "done"
 
 
+def _start_and_signal(tree, out, config, sig, *, after: int = 2):
+    """Start a 2-worker batch in its own session; send ``sig`` to the whole group once
+    ``after`` tests are in. Returns (exit status, stderr)."""
+    cmd = [sys.executable, "-m", "tiremodal_cli", "batch", str(tree), "-o", str(out), "--jobs", "2",
+           "--config", str(config), "--no-plots"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        deadline = time.monotonic() + 300
+        while time.monotonic() < deadline and proc.poll() is None:
+            if out.exists() and len(_outputs(out)) >= after:
+                break
+            time.sleep(0.05)
+        assert proc.poll() is None, "the batch finished before the signal"
+        os.killpg(proc.pid, sig)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    time.sleep(0.5)  # let killed workers' file handles go
+    return proc.returncode, err.decode()
+
+
 def test_killed_batch_resumes_without_redoing(tmp_path, campaign):
     """SIGKILL the whole batch (parent and workers) once two tests are in; re-run."""
     root, tree, _, _ = campaign
     out = tmp_path / "out"
-    cmd = [sys.executable, "-m", "tiremodal_cli", "batch", str(tree), "-o", str(out), "--jobs", "2",
-           "--config", str(root / "fast.toml"), "--no-plots"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-    try:
-        deadline = time.monotonic() + 300
-        while time.monotonic() < deadline and proc.poll() is None:
-            if out.exists() and len(_outputs(out)) >= 2:
-                break
-            time.sleep(0.05)
-        assert proc.poll() is None, "the batch finished before it could be killed"
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait(timeout=30)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-    time.sleep(0.5)  # let the killed workers' file handles go
+    _start_and_signal(tree, out, root / "fast.toml", signal.SIGKILL)
     before = _outputs(out)
     assert 2 <= len(before) < len(GOOD)
     for p in before:  # never a half-written folder: every visible one is complete
@@ -190,6 +199,22 @@ def test_killed_batch_resumes_without_redoing(tmp_path, campaign):
     assert sum(s == "failed" for s in st.values()) == 3
     assert {n: (out / n / MANIFEST).stat().st_mtime_ns for n in stamps} == stamps
     assert [p.name for p in _outputs(out)] == sorted(GOOD) and not (out / ".partial").exists()
+
+
+def test_ctrl_c_stops_the_workers_and_exits_130(tmp_path, campaign):
+    root, tree, _, _ = campaign
+    out = tmp_path / "out"
+    rc, err = _start_and_signal(tree, out, root / "fast.toml", signal.SIGINT, after=1)
+    assert rc == 130 and err.rstrip().endswith("Interrupted.")
+    assert "Traceback" not in err
+    done = _outputs(out)
+    assert 1 <= len(done) < len(GOOD) and all(is_complete(p) for p in done)
+    # rows of what was done before the interrupt (a folder a worker installed just as the
+    # signal came may have no row yet: it is skipped next time)
+    recs = read_summary(out) if (out / "summary.jsonl").exists() else []
+    assert {r["test"] for r in recs if r["status"] == "done"} <= {p.name for p in done}
+    again = run_batch([tree], out, load_config(root / "fast.toml"), plots=False)
+    assert {r["test"] for r in again if r["status"] == "skipped"} == {p.name for p in done}
 
 
 def _comparable(recs):

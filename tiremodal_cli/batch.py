@@ -312,8 +312,19 @@ def executor(jobs: int = 1, scheduler: str | None = None) -> Iterator[cf.Executo
     pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("forkserver"))
     try:
         yield pool
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+    except BaseException:
+        # interrupted: stop now, not after the jobs already queued to the workers
+        stop = getattr(pool, "terminate_workers", None)  # Python ≥ 3.14
+        if stop is not None:
+            stop()
+        else:  # before 3.14: the pool's processes (shutdown forgets them, so take them first)
+            procs = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for proc in procs:
+                proc.terminate()
+        raise
+    else:
+        pool.shutdown(wait=True)
 
 
 # --------------------------------------------------------------------------- the batch
