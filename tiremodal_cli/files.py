@@ -25,7 +25,99 @@ def _umask() -> int:
 
 _UMASK = _umask()
 
-__all__ = ["atomic_path", "check_overwrite", "dumps", "install_dir", "sha256_file", "write_text_atomic"]
+__all__ = ["atomic_path", "check_overwrite", "dumps", "install_dir", "sha256_file", "write_text_atomic",
+           "refuse_input_as_output", "path_lock", "check_size"]
+
+
+def _same_or_inside(out: Path, inp: Path) -> bool:
+    """True when ``out`` is ``inp`` (same file, also through links) or lies inside the folder ``inp``."""
+    try:
+        o, i = out.resolve(), inp.resolve()
+    except (OSError, RuntimeError):
+        return False
+    if o == i or (o.exists() and i.exists() and os.path.samefile(o, i)):
+        return True
+    return i.is_dir() and i in o.parents
+
+
+def refuse_input_as_output(outputs, inputs) -> None:
+    """Refuse an output that is one of the inputs or lies inside an input folder.
+
+    Parameters
+    ----------
+    outputs : mapping option name → path (None entries ignored), e.g. ``{"-o": out, "--plot": p}``
+    inputs : mapping name → path of what the command reads (None entries ignored)
+
+    Raises
+    ------
+    ParameterError
+        Naming the option, the path and the input it would replace.
+    """
+    for opt, out in outputs.items():
+        if out is None:
+            continue
+        for what, inp in inputs.items():
+            if inp is None:
+                continue
+            if _same_or_inside(Path(out), Path(inp)):
+                rel = "is" if Path(out).resolve() == Path(inp).resolve() else "is inside"
+                raise ParameterError(f"{opt} {str(out)!r} {rel} the input {what} {str(inp)!r}; "
+                                     "an input is never replaced: choose another output")
+
+
+@contextlib.contextmanager
+def path_lock(lock: str | os.PathLike, what: str) -> Iterator[None]:
+    """Hold an exclusive advisory lock on the file ``lock`` (created; removed on release).
+
+    Refuses at once (ParameterError naming ``what``) when another process holds it. The
+    lock file is removed on release; a process that opened the file before the removal
+    sees that its inode is gone and tries again, so two holders never coexist.
+    """
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock
+        yield
+        return
+    lock = Path(lock)
+    while True:
+        fh = open(lock, "a+")
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            fh.close()
+            raise ParameterError(f"{what}: another process is writing there (lock {lock})") from None
+        try:
+            same = os.fstat(fh.fileno()).st_ino == os.stat(lock).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        fh.close()  # removed by the holder we waited on: take the new one
+    try:
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            lock.unlink()
+        fh.close()
+
+
+#: memory a command may plan to hold at once before it refuses (bytes): a quarter of the
+#: machine's physical memory, at most 8 GiB, so one job never takes the machine.
+def memory_budget() -> int:
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        total = 8 << 30
+    return int(min(total // 4, 8 << 30))
+
+
+def check_size(nbytes: float, what: str, limit: int | None = None) -> None:
+    """Refuse a planned allocation of ``nbytes`` larger than the memory budget, in one line
+    naming ``what`` (the option(s) and values that set it)."""
+    limit = memory_budget() if limit is None else limit
+    if not nbytes <= limit:
+        raise ParameterError(f"{what} needs about {nbytes / 2**30:.3g} GiB of memory; "
+                             f"allowed: at most {limit / 2**30:.3g} GiB (a quarter of this machine's memory, ≤ 8 GiB)")
 
 
 def check_overwrite(path: str | os.PathLike, overwrite: bool) -> Path:

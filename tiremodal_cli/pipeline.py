@@ -11,6 +11,7 @@ and a folder without one is not.
 from __future__ import annotations
 
 import json
+import os
 import time
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
@@ -18,7 +19,7 @@ from pathlib import Path
 from . import __version__
 from .diagnose import DiagnoseOptions, diagnose, report
 from .errors import DataFormatError, ParameterError
-from .files import dumps, sha256_file, write_text_atomic
+from .files import _UMASK, dumps, install_dir, path_lock, refuse_input_as_output, sha256_file, write_text_atomic
 from .frf import FRFOptions, compute_frf
 from .frffile import write_frf
 from .identify import FitOptions, fit, fit_report, modes_from_rows, predict_table
@@ -28,7 +29,8 @@ from .model import TyreParameters
 from .modes import ModalOptions, modal_table_from_frf
 from .sensitivity import PAPER_STUDY, coefficients
 
-__all__ = ["RunOptions", "run", "is_complete", "read_manifest", "OUTPUTS", "MANIFEST"]
+__all__ = ["RunOptions", "run", "run_folder", "is_complete", "read_manifest", "verify_manifest", "OUTPUTS",
+           "MANIFEST"]
 
 OUTPUTS = ("frf.h5", "modal.h5", "modes.csv", "identify.json", "diagnosis.json", "sensitivity.json")
 MANIFEST = "run.json"
@@ -184,6 +186,106 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
                 "outputs": {name: sha256_file(outdir / name) for name in names}, "summary": summary}
     write_text_atomic(outdir / MANIFEST, _json(manifest), overwrite=True)
     return summary
+
+
+#: views of a run folder that ``report`` writes; a new run does not carry them over (stale)
+_VIEWS = ("report.html", "figures")
+
+
+def _link_or_copy(src: str, dst: str) -> None:
+    import shutil
+
+    try:
+        os.link(src, dst)
+    except OSError:
+        shutil.copy2(src, dst)
+
+
+def run_folder(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyreParameters | None = None,
+               progress=None, overwrite: bool = False) -> dict:
+    """:func:`run` made atomic: the outputs are written into a private folder beside
+    ``outdir`` (``.NAME.partial.*``) and the folder is installed whole
+    (:func:`~tiremodal_cli.files.install_dir`), under a lock (``.NAME.lock`` beside it).
+
+    At every instant ``outdir`` is the complete old folder, absent, or the complete new one:
+    an error or a kill leaves at most debris under ``.NAME.partial.*``/``.NAME.old.*``,
+    removed by the next run into ``outdir``. Files of the old folder that are not run
+    outputs (the measurement itself when it lies there, notes) are carried into the new
+    one (hard links where possible); the report's views (report.html, figures/) are not.
+
+    Raises
+    ------
+    OutputExistsError : outputs exist in ``outdir`` and ``overwrite`` is false
+    ParameterError : ``outdir`` is the measurement, or is a file, or another run holds its lock
+    """
+    import shutil
+    import tempfile
+
+    from .errors import OutputExistsError
+
+    measurement, outdir = Path(measurement), Path(outdir)
+    refuse_input_as_output({"--output": outdir}, {"measurement": measurement})
+    if outdir.exists() and not outdir.is_dir():
+        raise ParameterError(f"--output {str(outdir)!r} exists and is not a folder")
+    if not measurement.is_file():
+        raise DataFormatError(f"{measurement}: no such file")
+    parent = outdir.parent
+    parent.mkdir(parents=True, exist_ok=True)
+    with path_lock(parent / f".{outdir.name}.lock", f"--output {str(outdir)!r}"):
+        existing = [n for n in (*OUTPUTS, MANIFEST) if (outdir / n).exists()]
+        if existing and not overwrite:
+            raise OutputExistsError(f"output {str(outdir / existing[0])!r} exists; pass --overwrite to replace it")
+        for debris in [*parent.glob(f".{outdir.name}.partial.*"), *parent.glob(f".{outdir.name}.old.*")]:
+            shutil.rmtree(debris, ignore_errors=True)  # of a killed run (we hold the lock)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{outdir.name}.partial.", dir=parent))
+        os.chmod(tmp, 0o777 & ~_UMASK)
+        try:
+            meas = measurement
+            if outdir.is_dir():
+                for entry in outdir.iterdir():
+                    if entry.name in (*OUTPUTS, MANIFEST, *_VIEWS):
+                        continue
+                    if entry.is_dir() and not entry.is_symlink():
+                        shutil.copytree(entry, tmp / entry.name, symlinks=True, copy_function=_link_or_copy)
+                    else:
+                        _link_or_copy(str(entry), str(tmp / entry.name))
+                if measurement.resolve().parent == outdir.resolve():
+                    meas = tmp / measurement.name
+            sha = sha256_file(measurement)
+            summary = run(meas, tmp, opt, params=params, progress=progress,
+                          source={"path": str(measurement), "kind": "measurement", "sha256": sha})
+            install_dir(tmp, outdir, aside=parent)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+    return summary
+
+
+def verify_manifest(folder, man: dict | None = None) -> dict:
+    """The manifest of a run folder after checking every output it lists against its checksum.
+
+    Raises
+    ------
+    DataFormatError
+        No manifest, a manifest that does not parse, or an output missing or changed
+        (named, with the expected and the found checksum).
+    """
+    folder = Path(folder)
+    man = read_manifest(folder) if man is None else man
+    if man is None:
+        raise DataFormatError(f"{folder}: no readable run manifest ({MANIFEST}); run 'tiremodal run' first")
+    outs = man.get("outputs") if isinstance(man, dict) else None
+    if not isinstance(outs, dict) or not set(OUTPUTS) <= set(outs):
+        raise DataFormatError(f"{folder / MANIFEST}: lists no checksums of {', '.join(OUTPUTS)}; "
+                              "not a complete run folder")
+    for name, h in outs.items():
+        p = folder / name
+        if not p.is_file():
+            raise DataFormatError(f"{p}: missing; the folder does not match its manifest ({MANIFEST})")
+        got = sha256_file(p)
+        if got != h:
+            raise DataFormatError(f"{p}: SHA-256 {got[:12]}… differs from the manifest's {str(h)[:12]}…; "
+                                  f"the folder does not match {MANIFEST} (mixed or changed outputs)")
+    return man
 
 
 def _sensitivity(res, n_max: int) -> dict:

@@ -27,7 +27,7 @@ import numpy as np
 from . import __version__
 from .errors import DataFormatError
 from .files import _UMASK, install_dir, write_text_atomic
-from .pipeline import MANIFEST, read_manifest
+from .pipeline import MANIFEST, read_manifest, verify_manifest
 
 __all__ = ["FIGURES", "report_run", "report_batch", "report", "REPORT_HTML", "INDEX_HTML"]
 
@@ -168,6 +168,7 @@ def report_run(folder, *, progress: Callable[[str], None] | None = None) -> Path
     man = read_manifest(folder)
     if man is None or man.get("format") != "tiremodal.run":
         raise DataFormatError(f"{folder}: no run manifest ({MANIFEST}); run 'tiremodal run' or 'batch' first")
+    verify_manifest(folder, man)  # a folder mixing two runs, or changed since, is refused
     ident = _load_json(folder / "identify.json")
     diag = _load_json(folder / "diagnosis.json")
     sens = _load_json(folder / "sensitivity.json")
@@ -188,6 +189,11 @@ def report_run(folder, *, progress: Callable[[str], None] | None = None) -> Path
     return write_text_atomic(folder / REPORT_HTML, html_text, overwrite=True)
 
 
+def _one_based(i):
+    """A 0-based index as 1-based, or "all" for a rejection of every hit (a dead channel)."""
+    return "all" if i is None else int(i) + 1
+
+
 def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> str:
     s = man["summary"]
     cap = dict(FIGURES)
@@ -204,7 +210,7 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> s
            "<h2>Test</h2>", _table([{"k": k, "v": v} for k, v in facts], [("k", ""), ("v", "")], left=("k", "v"))]
     rej = s.get("rejected_hits") or []
     out.append(f"<h2>Rejected hits ({len(rej)})</h2>")
-    out.append(_table([{**x, "point": x.get("point", 0) + 1, "hit": x.get("hit", 0) + 1} for x in rej],
+    out.append(_table([{**x, "point": _one_based(x.get("point")), "hit": _one_based(x.get("hit"))} for x in rej],
                       [("point", "point"), ("hit", "hit"), ("channel", "channel"), ("reason", "reason")],
                       left=("channel", "reason")) if rej else "<p>None: every hit passed the checks.</p>")
     out += ["<h2>FRFs and coherence</h2>", fig("frf"), "<h2>Stabilization diagram</h2>", fig("stabilization")]

@@ -7,7 +7,8 @@ from pathlib import Path
 import click
 
 from ..errors import OutputExistsError
-from ..pipeline import MANIFEST, OUTPUTS, RunOptions, run
+from ..files import refuse_input_as_output
+from ..pipeline import MANIFEST, OUTPUTS, RunOptions, run_folder
 from .main import cli
 from .options import echo_json, json_option, load_params, params_options
 
@@ -33,20 +34,24 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
     """Run frf → lsce → identify → diagnose on MEASUREMENT, writing each stage into OUTDIR.
 
     Writes frf.h5, modal.h5, modes.csv, identify.json, diagnosis.json and, last, run.json
-    (checksums and summary). Prints the summary (JSON with --json).
+    (checksums and summary) into a private folder beside OUTDIR, installed whole when
+    complete: OUTDIR is always the old complete run, absent, or the new one. Prints the
+    summary (JSON with --json).
     """
     existing = [n for n in (*OUTPUTS, MANIFEST) if (outdir / n).exists()]
-    if existing and not overwrite:
+    if existing and not overwrite:  # checked again under the lock; here to refuse before any work
         raise OutputExistsError(f"output {str(outdir / existing[0])!r} exists; pass --overwrite to replace it")
+    refuse_input_as_output({"--output": outdir}, {"MEASUREMENT": measurement})
     base, effects = load_params(params_file, param_items)
     if effects:
         raise click.BadParameter("run finds the effects itself: a params file holds no [effects] here",
                                  param_hint="--params")
-    if "m_w" not in dict(p.split("=", 1)[0].strip() for p in param_items if "=" in p) and not params_file:
+    if "m_w" not in {p.split("=", 1)[0].strip() for p in param_items if "=" in p} and not params_file:
         base = base.replace(m_w=1000.0)
     opt = RunOptions(band=tuple(band) if band else None, exp_end=None if no_exp_window else exp_end, seed=seed,
                      noise_floor_pct=noise_floor_pct, max_effects=max_effects, pressure_from_file=not p0_from_params)
-    summary = run(measurement, outdir, opt, params=base, progress=lambda s: click.echo(f"run: {s} …", err=True))
+    summary = run_folder(measurement, outdir, opt, params=base, overwrite=overwrite,
+                         progress=lambda s: click.echo(f"run: {s} …", err=True))
     if as_json:
         echo_json(summary)
         return
