@@ -173,6 +173,9 @@ def load_config(path=None, *, run_overrides: dict | None = None, param_overrides
     unknown = sorted(set(data) - {"run", "params", "ingest"})
     if unknown:
         raise ParameterError(f"{where}: unknown table [{unknown[0]}]; allowed: [run], [params], [ingest]")
+    for t in ("run", "params", "ingest"):
+        if t in data and not isinstance(data[t], dict):
+            raise ParameterError(f"{where}: {t} = {data[t]!r} is not a table; allowed: a [{t}] table")
     run_d = {**dict(data.get("run", {})), **(run_overrides or {})}
     opt = RunOptions.from_mapping(run_d, f"{where} [run]")
     par = {"m_w": 1000.0, **dict(data.get("params", {})), **(param_overrides or {})}
@@ -184,6 +187,9 @@ def load_config(path=None, *, run_overrides: dict | None = None, param_overrides
     bad = sorted(set(ing) - {"mapping"})
     if bad:
         raise ParameterError(f"{where} [ingest]: unknown option {bad[0]!r}; allowed: mapping")
+    if "mapping" in ing and not (isinstance(ing["mapping"], str) and ing["mapping"].strip()
+                                 and "/" not in ing["mapping"] and "\\" not in ing["mapping"]):
+        raise ParameterError(f"{where} [ingest]: mapping = {ing['mapping']!r}; allowed: a file name (text, no folder)")
     return BatchConfig(run=opt, params=params, mapping=str(ing.get("mapping", "mapping.toml")))
 
 

@@ -53,9 +53,11 @@ def refuse_input_as_output(outputs, inputs) -> None:
     ParameterError
         Naming the option, the path and the input it would replace.
     """
-    for opt, out in outputs.items():
-        if out is None:
-            continue
+    given = [(opt, Path(out)) for opt, out in outputs.items() if out is not None]
+    for i, (opt, out) in enumerate(given):
+        for opt2, out2 in given[:i]:
+            if out.resolve() == out2.resolve():
+                raise ParameterError(f"{opt} {str(out)!r} is also {opt2}; allowed: a different file for each output")
         for what, inp in inputs.items():
             if inp is None:
                 continue

@@ -22,6 +22,10 @@ __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "LOCATIONS", "Measurement", "read_me
 
 FORMAT_NAME = "tiremodal.measurement"
 FORMAT_VERSION = 1
+#: shortest record accepted: 64 samples give 33 spectral lines, the least ``lsce``'s lowest
+#: sweep (model order 2 per order and a stabilization over 16 orders) can use; ``simulate``
+#: has the same lower bound
+MIN_SAMPLES = 64
 LOCATIONS = ("tread", "sidewall", "rim")
 
 
@@ -105,6 +109,12 @@ def validate(m: Measurement, where: str = "measurement") -> None:
                      "n_points, n_hits and n_samples")
     if min(n_p, n_h, n_s, r.shape[2]) < 1:
         _fail(where, f"empty dataset: force {f.shape}, response {r.shape}")
+    if n_s < MIN_SAMPLES:
+        _fail(where, f"records of {n_s} samples; allowed: at least {MIN_SAMPLES} (a spectrum of "
+                     f"{MIN_SAMPLES // 2 + 1} lines, the fewest a modal estimate can use)")
+    p = m.inflation_pressure
+    if p is not None and not (isinstance(p, (int, float, np.floating, np.integer)) and np.isfinite(p) and p > 0):
+        _fail(where, f"inflation_pressure={p!r}; allowed: a positive finite pressure in Pa, or none")
     for name, arr in (("force", f), ("response", r)):
         if arr.dtype not in (np.float32, np.float64):
             _fail(where, f"dataset {name!r} has dtype {arr.dtype}; allowed: float32, float64")
@@ -200,8 +210,14 @@ def _read_header(h, where: str, *, lazy: bool) -> dict:
         sr = float(sr)
     except (TypeError, ValueError):
         _fail(where, f"sample_rate={sr!r} is not a number")
+    if pressure is not None:
+        try:
+            pressure = float(pressure)
+        except (TypeError, ValueError):
+            _fail(where, f"inflation_pressure={_attr_str(h.attrs, 'inflation_pressure')!r} is not a number; "
+                         "allowed: a positive finite pressure in Pa, or no attribute")
     kwargs = dict(sample_rate=sr,
-                  inflation_pressure=None if pressure is None else float(pressure),
+                  inflation_pressure=pressure,
                   tire=_attr_str(h.attrs, "tire"),
                   description=_attr_str(h.attrs, "description"))
     return {**data, **kwargs}

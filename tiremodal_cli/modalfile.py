@@ -196,13 +196,60 @@ def read_modal(path) -> ModalTable:
                       rejected=js("rejected"))
 
 
+#: highest circumferential order a table may name (``predict --n-max``'s bound: beyond it
+#: the model's n⁴ bending term leaves any tyre's measurable band many times over)
+N_ORDER_MAX = 200
+
+#: numeric columns of a modal CSV: (low, high, low open, integer, nan allowed); empty cells are "unknown"
+_CSV_NUMBERS = {
+    "mode": (1, None, False, True, False),
+    "frequency_hz": (0.0, None, True, False, False),
+    "damping_ratio": (0.0, 1.0, False, False, True),
+    "n": (-1, N_ORDER_MAX, False, True, False),
+    "n_spatial": (-1, N_ORDER_MAX, False, True, True),
+    "n_confidence": (0.0, 1.0, False, False, True),
+    "branch_confidence": (0.0, 1.0, False, False, True),
+    "mpc": (0.0, 1.0, False, False, True),
+    "significance": (0.0, None, False, False, True),
+    "frequency_uncertainty_hz": (0.0, None, False, False, True),
+    "splitting_hz": (0.0, None, False, False, True),
+}
+
+
+def _check_csv_cell(path, row: int, key: str, text: str) -> None:
+    lo, hi, lo_open, integer, nan_ok = _CSV_NUMBERS[key]
+    allowed = (("an integer" if integer else "a finite number") + f" {'>' if lo_open else '≥'} {lo}"
+               + (f" and ≤ {hi}" if hi is not None else "") + (", nan" if nan_ok else "") + ", or empty")
+    try:
+        v = float(text)
+    except ValueError:
+        v = None
+    if v is not None and np.isnan(v) and nan_ok:
+        return
+    ok = (v is not None and np.isfinite(v) and (v > lo if lo_open else v >= lo) and (hi is None or v <= hi)
+          and (not integer or v == int(v)))
+    if not ok:
+        raise DataFormatError(f"{path}: row {row}: {key}={text!r} is not allowed; allowed: {allowed}")
+
+
 def read_modal_csv(path) -> list[dict]:
-    """Rows of a modal CSV (``lsce --csv``, or the paper's Table A1 layout): dicts of strings."""
+    """Rows of a modal CSV (``lsce --csv``, or the paper's Table A1 layout): dicts of strings.
+
+    Every number is checked (finite, in range, integer where it must be; see
+    ``_CSV_NUMBERS``): a bad cell raises DataFormatError naming the file, row (1-based,
+    after the header), column, value and what is allowed.
+    """
     try:
         with open(path, newline="", encoding="utf-8") as fh:
-            return list(csv.DictReader(fh))
+            rows = list(csv.DictReader(fh))
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise DataFormatError(f"{path}: cannot read as CSV ({exc})") from None
+    for i, r in enumerate(rows):
+        for key in _CSV_NUMBERS:
+            v = r.get(key)
+            if isinstance(v, str) and v.strip() != "":
+                _check_csv_cell(path, i + 1, key, v.strip())
+    return rows
 
 
 def describe_modal(path) -> dict:
@@ -211,3 +258,15 @@ def describe_modal(path) -> dict:
             "band_hz": (t.meta or {}).get("band_hz"), "n_channels": len(t.channel_name),
             "n_points": int(t.point_angle.size), "tyre_classified": bool(np.any(t.n >= 0)),
             "modes": to_rows(t)}
+
+
+def no_usable_modes(source, rows, skipped) -> str:
+    """The message for a modal table with no mode a fit can use: the file, how many rows,
+    and the commonest reasons the rows were left out."""
+    import re
+    from collections import Counter
+
+    reasons = Counter(re.sub(r"[-+]?\d[\d.e+-]*", "#", s["reason"]) for s in skipped)
+    why = "; ".join(f"{k} ({v}×)" for k, v in reasons.most_common(2)) or "the table is empty"
+    return (f"{source}: no usable modes among {len(rows)} row(s) ({why}); allowed: rows with frequency_hz > 0, "
+            "an integer n ≥ 0 and branch same/opposite (run lsce with --spatial on for tyre FRFs)")

@@ -11,6 +11,7 @@ and a folder without one is not.
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
 from dataclasses import asdict, dataclass, fields
@@ -73,37 +74,39 @@ class RunOptions:
         if unknown:
             raise ParameterError(f"{where}: unknown option {unknown[0]!r}; allowed: {', '.join(names)}")
         kw = dict(d)
-        try:
-            if kw.get("band") is not None:
-                lo, hi = (float(x) for x in kw["band"])
-                if not 0 <= lo < hi:
-                    raise ValueError("band needs 0 ≤ LO < HI")
-                kw["band"] = (lo, hi)
-            if "exp_end" in kw:
-                v = kw["exp_end"]
-                kw["exp_end"] = None if v is False or v is None else float(v)
-                if kw["exp_end"] is not None and not 0 < kw["exp_end"] < 1:
-                    raise ValueError("exp_end must be in (0, 1), or false for no window")
-            for k in ("frf_top", "noise_floor_pct"):
-                if k in kw:
-                    kw[k] = float(kw[k])
-                    if kw[k] <= 0:
-                        raise ValueError(f"{k} must be > 0")
-            if "frf_top" in kw and kw["frf_top"] > 0.5:
-                raise ValueError("frf_top must be ≤ 0.5 (a fraction of the sample rate)")
-            if "pressure_from_file" in kw and not isinstance(kw["pressure_from_file"], bool):
-                raise ValueError("pressure_from_file must be true or false")
-            for k in ("seed", "max_effects", "predict_n"):
-                if k in kw:
-                    if isinstance(kw[k], bool) or int(kw[k]) != kw[k]:
-                        raise ValueError(f"{k} must be an integer")
-                    kw[k] = int(kw[k])
-            if not 0 <= kw.get("max_effects", 0) <= 5:
-                raise ValueError("max_effects must be in 0…5")
-            if not 1 <= kw.get("predict_n", 1) <= 100:
-                raise ValueError("predict_n must be in 1…100")
-        except (TypeError, ValueError) as exc:
-            raise ParameterError(f"{where}: {exc}") from None
+
+        def bad(k, allowed):
+            return ParameterError(f"{where}: {k} = {d[k]!r} is not allowed; allowed: {allowed}")
+
+        def number(k, ok, allowed):
+            v = kw[k]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or not ok(v):
+                raise bad(k, allowed)
+            return float(v)
+
+        if kw.get("band") is not None:
+            v = kw["band"]
+            if (not isinstance(v, (list, tuple)) or len(v) != 2
+                    or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) for x in v)
+                    or not 0 <= v[0] < v[1]):
+                raise bad("band", "[LO, HI] in Hz with 0 ≤ LO < HI")
+            kw["band"] = (float(v[0]), float(v[1]))
+        if "exp_end" in kw:
+            if kw["exp_end"] is False or kw["exp_end"] is None:
+                kw["exp_end"] = None
+            else:
+                kw["exp_end"] = number("exp_end", lambda x: 0 < x < 1, "a number in (0, 1), or false for no window")
+        if "frf_top" in kw:
+            kw["frf_top"] = number("frf_top", lambda x: 0 < x <= 0.5, "a fraction of the sample rate in (0, 0.5]")
+        if "noise_floor_pct" in kw:
+            kw["noise_floor_pct"] = number("noise_floor_pct", lambda x: 0 < x <= 100, "a percentage in (0, 100]")
+        if "pressure_from_file" in kw and not isinstance(kw["pressure_from_file"], bool):
+            raise bad("pressure_from_file", "true or false")
+        for k, lo, hi in (("seed", None, None), ("max_effects", 0, 5), ("predict_n", 1, 100)):
+            if k in kw:
+                v = kw[k]
+                if (isinstance(v, bool) or not isinstance(v, int) or (lo is not None and not lo <= v <= hi)):
+                    raise bad(k, "an integer" + (f" in {lo}…{hi}" if lo is not None else ""))
         return cls(**kw)
 
 
@@ -136,6 +139,9 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     say("frf")
     with open_measurement(measurement) as m:
         fs = float(m.sample_rate)
+        if opt.band is not None and not opt.band[1] <= opt.frf_top * fs:
+            raise ParameterError(f"band {opt.band[0]:g} … {opt.band[1]:g} Hz: allowed: HI ≤ {opt.frf_top * fs:g} Hz "
+                                 f"(the FRFs' top, {opt.frf_top:g} × the sample rate; Nyquist {fs / 2:g} Hz)")
         try:
             r = compute_frf(m, FRFOptions(band_hz=(0.0, opt.frf_top * fs), exp_end=opt.exp_end))
         except OSError as exc:
@@ -157,6 +163,10 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     rows = to_rows(table)
     say("identify")
     modes, skipped = modes_from_rows(rows, source="modal.h5")
+    if not modes:
+        from .modalfile import no_usable_modes
+
+        raise DataFormatError(no_usable_modes(f"{source['path']} (its modal table)", rows, skipped))
     res = fit(modes, params, FitOptions(seed=opt.seed))
     # predictions reach the highest measured order and two beyond ("the higher orders")
     n_pred = max([opt.predict_n] + [m["n"] + 2 for m in res.modes])

@@ -11,7 +11,7 @@ import click
 
 from ..batch import SUMMARY_CSV, SUMMARY_JSONL, load_config, run_batch
 from .main import cli
-from .options import echo_json, json_option, parse_key_values
+from .options import FiniteRange, band_option, echo_json, json_option, parse_key_values
 
 
 class _BatchProgress:
@@ -53,12 +53,12 @@ class _BatchProgress:
 @click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path),
               help="TOML/JSON with [run] options, [params] nominal parameters, [ingest] mapping name.")
 @click.option("--force", is_flag=True, help="Redo tests whose outputs are complete and unchanged.")
-@click.option("--band", nargs=2, type=float, metavar="LO HI", default=None, help="lsce band, Hz.")
-@click.option("--exp-end", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=None,
+@band_option("lsce band, Hz.", default=None)
+@click.option("--exp-end", type=FiniteRange(0, 1, min_open=True, max_open=True), default=None,
               help="Exponential window's value at the record's end [default 0.05].")
 @click.option("--no-exp-window", is_flag=True, help="No exponential window.")
 @click.option("--seed", type=int, default=None, help="Seed of every search [default 0].")
-@click.option("--noise-floor-pct", type=click.FloatRange(0, 100, min_open=True), default=None,
+@click.option("--noise-floor-pct", type=FiniteRange(0, 100, min_open=True), default=None,
               help="Frequency noise floor of the diagnosis, % [default 0.1].")
 @click.option("--max-effects", type=click.IntRange(0, 5), default=None, help="Effects diagnose may add [default 2].")
 @click.option("--p0-from-params", is_flag=True, default=None,

@@ -7,10 +7,11 @@ from pathlib import Path
 import click
 
 from ..diagnose import DiagnoseOptions, diagnose, report
-from ..files import check_overwrite, write_text_atomic
+from ..files import check_overwrite, refuse_input_as_output, write_text_atomic
 from .main import cli
-from .options import Progress, dumps, echo_json, json_option, load_params, overwrite_option, params_options, \
-    read_table_rows
+from ..errors import DataFormatError
+from .options import (FiniteRange, PlotPath, Progress, dumps, echo_json, json_option, load_params, no_usable_modes,
+                      overwrite_option, params_options, read_table_rows)
 
 
 def human(rep: dict) -> str:
@@ -44,17 +45,17 @@ def human(rep: dict) -> str:
 @params_options
 @click.option("--free", default="k_r1,k_r2,EI", show_default=True, help="Parameters of the base fit.")
 @click.option("--candidates", help="Candidates to try, comma-separated (default: every effect and parameter).")
-@click.option("--noise-floor-pct", type=click.FloatRange(0, 100, min_open=True), default=0.1, show_default=True,
+@click.option("--noise-floor-pct", type=FiniteRange(0, 100, min_open=True), default=0.1, show_default=True,
               help="Floor of each mode's relative frequency uncertainty, %.")
-@click.option("--alpha", type=click.FloatRange(0, 0.5, min_open=True, max_open=True), default=0.01,
+@click.option("--alpha", type=FiniteRange(0, 0.5, min_open=True, max_open=True), default=0.01,
               show_default=True, help="Level of the residual χ² test and (÷ candidates) of the F-tests.")
 @click.option("--max-effects", type=click.IntRange(0, 5), default=2, show_default=True)
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the evolutionary searches.")
 @click.option("--predict-n", type=click.IntRange(1, 100), default=12, show_default=True)
-@click.option("--min-confidence", type=float, default=0.5, show_default=True)
+@click.option("--min-confidence", type=FiniteRange(0, 1), default=0.5, show_default=True,
+              help="Leave out modes with lower n_confidence (0 … 1).")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), help="Also write the JSON report here.")
-@click.option("--plot", "plot_out", type=click.Path(dir_okay=False, path_type=Path),
-              help="Residual per (n, branch) before and after.")
+@click.option("--plot", "plot_out", type=PlotPath(), help="Residual per (n, branch) before and after.")
 @overwrite_option
 @json_option
 def diagnose_cmd(modes_file, params_file, param_items, free, candidates, noise_floor_pct, alpha, max_effects, seed,
@@ -64,6 +65,7 @@ def diagnose_cmd(modes_file, params_file, param_items, free, candidates, noise_f
     MODES_FILE is what identify takes: a modal file from lsce, or a CSV with frequency_hz,
     n and branch (the paper's Table A1: sample_data/paper_table_a1.csv).
     """
+    refuse_input_as_output({"--output": output, "--plot": plot_out}, {"MODES_FILE": modes_file, "--params": params_file})
     for o in (output, plot_out):
         if o is not None:
             check_overwrite(o, overwrite)
@@ -75,6 +77,11 @@ def diagnose_cmd(modes_file, params_file, param_items, free, candidates, noise_f
                           candidates=tuple(x.strip() for x in candidates.split(",")) if candidates else None,
                           noise_floor_pct=noise_floor_pct, alpha=alpha, max_effects=max_effects, seed=seed)
     rows, n_points = _rows_and_points(modes_file)
+    from ..identify import modes_from_rows
+
+    usable, skipped = modes_from_rows(rows, min_confidence=min_confidence, split_pairs="members")
+    if not usable:
+        raise DataFormatError(no_usable_modes(modes_file, rows, skipped))
     bar = Progress("diagnose")
     try:
         diag = diagnose(rows, base, opt, n_points=n_points, min_confidence=min_confidence, progress=bar)

@@ -5,14 +5,31 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+import numpy as np
 
 from ..errors import DataFormatError
-from ..files import check_overwrite, sha256_file
+from ..files import check_overwrite, refuse_input_as_output, sha256_file
 from ..frf import ESTIMATORS, FORMS, FRFOptions, compute_frf
 from ..frffile import describe_frf, write_frf, write_frf_uff
 from ..measurement import open_measurement
 from .main import cli
-from .options import Progress, echo_json, json_option, overwrite_option
+from .options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option
+
+
+def _check_windows(m, force_window_s, exp_tau_s) -> None:
+    """Window lengths against the record: the force window's flat part must be shorter than
+    the record; the exponential window's time constant τ at least 2/(π fs) — it widens every
+    line by 1/(π τ) Hz (its Lorentzian's half-power bandwidth), which must stay below the
+    Nyquist frequency fs/2 or no line is resolved at all."""
+    T, fs = m.n_samples / m.sample_rate, m.sample_rate
+    if force_window_s is not None and not force_window_s < T:
+        raise click.BadParameter(f"{force_window_s:g} s is not shorter than the record ({T:g} s); "
+                                 f"allowed: 0 < SECONDS < {T:g}", param_hint="--force-window-length")
+    tau_min = 2.0 / (np.pi * fs)
+    if exp_tau_s is not None and exp_tau_s < tau_min:
+        raise click.BadParameter(f"{exp_tau_s:g} s widens every line by {1 / (np.pi * exp_tau_s):.3g} Hz, beyond "
+                                 f"the Nyquist frequency ({fs / 2:g} Hz); allowed: ≥ 2/(π fs) = {tau_min:.3g} s",
+                                 param_hint="--exp-tau")
 
 
 @cli.command("frf")
@@ -21,21 +38,22 @@ from .options import Progress, echo_json, json_option, overwrite_option
               help="FRF file to write (HDF5).")
 @click.option("--estimator", type=click.Choice(ESTIMATORS), default="H1", show_default=True)
 @click.option("--form", type=click.Choice(FORMS), default="accelerance", show_default=True)
-@click.option("--band", nargs=2, type=float, metavar="LO HI", help="Keep LO ≤ f ≤ HI (Hz); default all lines.")
+@band_option("Keep LO ≤ f ≤ HI (Hz); default all lines.")
 @click.option("--force-window/--no-force-window", default=True, show_default=True,
               help="Rectangular window over the pulse with cosine tapers.")
-@click.option("--force-window-length", type=float, metavar="SECONDS", help="Flat length (default: from the pulse).")
-@click.option("--exp-end", type=click.FloatRange(0, 1, min_open=True, max_open=True),
+@click.option("--force-window-length", type=FiniteRange(0, min_open=True), metavar="SECONDS",
+              help="Flat length (default: from the pulse); shorter than the record.")
+@click.option("--exp-end", type=FiniteRange(0, 1, min_open=True, max_open=True),
               help="Exponential window: its value at the record's end (adds known damping, corrected downstream).")
-@click.option("--exp-tau", type=click.FloatRange(0, min_open=True), metavar="SECONDS",
-              help="Exponential window by its time constant instead.")
+@click.option("--exp-tau", type=FiniteRange(0, min_open=True), metavar="SECONDS",
+              help="Exponential window by its time constant instead (at least 2/(π fs): see docs/frf.md).")
 @click.option("--no-hit-checks", is_flag=True, help="Keep every finite hit (no double-hit/clip/consistency checks).")
-@click.option("--hit-residual-max", type=click.FloatRange(0, min_open=True), default=0.1, show_default=True,
+@click.option("--hit-residual-max", type=FiniteRange(0, 1, min_open=True), default=0.1, show_default=True,
               help="Reject a hit the other hits' H1 leaves more of its energy unexplained than this "
                    "(and 3× the hits' median; ≥ 3 hits).")
 @click.option("--uff", "uff_out", type=click.Path(dir_okay=False, path_type=Path),
               help="Also write the FRFs as UFF 58 (function type 4).")
-@click.option("--plot", "plot_out", type=click.Path(dir_okay=False, path_type=Path),
+@click.option("--plot", "plot_out", type=PlotPath(),
               help="Also draw magnitude, phase and coherence (PNG/SVG/PDF).")
 @click.option("--plot-points", default="1", show_default=True, help="Points to plot, 1-based, comma-separated.")
 @overwrite_option
@@ -43,6 +61,7 @@ from .options import Progress, echo_json, json_option, overwrite_option
 def frf_cmd(measurement, output, estimator, form, band, force_window, force_window_length, exp_end, exp_tau,
             no_hit_checks, hit_residual_max, uff_out, plot_out, plot_points, overwrite, as_json):
     """Estimate FRFs of MEASUREMENT into OUTPUT, rejecting bad hits (reported)."""
+    refuse_input_as_output({"--output": output, "--uff": uff_out, "--plot": plot_out}, {"MEASUREMENT": measurement})
     for out in (output, uff_out, plot_out):
         if out is not None:
             check_overwrite(out, overwrite)
@@ -59,21 +78,26 @@ def frf_cmd(measurement, output, estimator, form, band, force_window, force_wind
     sha = sha256_file(measurement) if measurement.is_file() else ""
     bar = Progress("frf")
     with open_measurement(measurement) as m:
+        _check_windows(m, force_window_length, exp_tau)
+        bad = [p + 1 for p in pts if not 0 <= p < m.n_points]
+        if plot_out and bad:
+            raise click.BadParameter(f"point {bad[0]} is not in 1…{m.n_points}", param_hint="--plot-points")
         try:
             r = compute_frf(m, opt, progress=bar)
         except OSError as exc:
             raise DataFormatError(f"{measurement}: cannot read the records ({exc}); the file may be truncated") from None
         finally:
             bar.close()
+    if not np.isfinite(r.H).any():
+        raise DataFormatError(f"{measurement}: every FRF line is non-finite with these options (windows "
+                              f"--exp-end {exp_end}, --exp-tau {exp_tau}, --force-window-length {force_window_length}); "
+                              "allowed: windows that leave the records a finite spectrum")
     write_frf(output, r, input_file=str(measurement), input_sha256=sha, overwrite=overwrite)
     if uff_out:
         write_frf_uff(uff_out, r, overwrite=overwrite)
     if plot_out:
         from ..plots import plot_frf, save_figure
 
-        bad = [p + 1 for p in pts if not 0 <= p < r.point_angle.size]
-        if bad:
-            raise click.BadParameter(f"point {bad[0]} is not in 1…{r.point_angle.size}", param_hint="--plot-points")
         axes = plot_frf(r, points=pts)
         save_figure(axes[0].figure, plot_out, overwrite=overwrite)
     summary = {"output": str(output), **describe_frf(output),

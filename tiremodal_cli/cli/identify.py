@@ -7,11 +7,21 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..files import check_overwrite, write_text_atomic
+from ..files import check_overwrite, refuse_input_as_output, write_text_atomic
 from ..identify import PAPER_GA, FitOptions, fit, fit_report, modes_from_rows, predict_table
 from .main import cli
-from .options import (Progress, echo_json, json_option, load_params, overwrite_option, params_options,
-                      read_table_rows, rows_to_csv)
+from ..errors import DataFormatError
+from .options import (FiniteRange, PlotPath, Progress, echo_json, json_option, load_params, no_usable_modes,
+                      overwrite_option, params_options, read_table_rows, rows_to_csv)
+
+
+#: Upper bounds of the search's size. Each member of each generation is one model solve
+#: (about 1 ms for the default orders), so 10,000 members × 100,000 generations is 10⁹
+#: solves — weeks on one core: the bounds keep a typo from running for ever, while 500×
+#: the paper's population (20) and 300× its generations (300) stay allowed. Memory is
+#: no limit here (a population of 10,000 × 7 parameters is 0.5 MB).
+POPULATION_MAX = 10_000
+GENERATIONS_MAX = 100_000
 
 
 def fit_options(free, bounds, weights, seed, paper_ga, population, generations):
@@ -22,6 +32,8 @@ def fit_options(free, bounds, weights, seed, paper_ga, population, generations):
             lo, hi = (float(x) for x in rng.split(":"))
         except ValueError:
             raise click.BadParameter(f"{item!r} must be NAME=LO:HI", param_hint="--bounds") from None
+        if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+            raise click.BadParameter(f"{item!r}: allowed: finite 0 < LO < HI (SI units)", param_hint="--bounds")
         b[name.strip()] = (lo, hi)
     kw = dict(free=tuple(x.strip() for x in free.split(",") if x.strip()), bounds=b, weights=weights, seed=seed)
     if paper_ga:
@@ -44,8 +56,10 @@ def common_fit_options(f):
         click.option("--seed", type=int, default=0, show_default=True, help="Seed of the evolutionary search."),
         click.option("--paper-ga", is_flag=True, help="The paper's settings: population 20, 300 generations, "
                                                       "crossover 0.7, mutation 0.1."),
-        click.option("--population", type=click.IntRange(4), help="Members of the population."),
-        click.option("--generations", type=click.IntRange(1), help="Generations of the search."),
+        click.option("--population", type=click.IntRange(4, POPULATION_MAX),
+                     help=f"Members of the population (at most {POPULATION_MAX:,})."),
+        click.option("--generations", type=click.IntRange(1, GENERATIONS_MAX),
+                     help=f"Generations of the search (at most {GENERATIONS_MAX:,})."),
     ]):
         f = opt(f)
     return f
@@ -57,15 +71,18 @@ def common_fit_options(f):
 @common_fit_options
 @click.option("--predict-n", type=click.IntRange(1, 100), default=12, show_default=True,
               help="Predict every (n, branch) up to this order.")
-@click.option("--min-confidence", type=float, default=0.5, show_default=True, help="Leave out modes with lower n_confidence.")
+@click.option("--min-confidence", type=FiniteRange(0, 1), default=0.5, show_default=True,
+              help="Leave out modes with lower n_confidence (0 … 1).")
 @click.option("--csv", "csv_out", type=click.Path(dir_okay=False, path_type=Path), help="Per-mode table as CSV.")
-@click.option("--plot-fit", type=click.Path(dir_okay=False, path_type=Path), help="Measured and model against n.")
-@click.option("--plot-convergence", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--plot-fit", type=PlotPath(), help="Measured and model against n.")
+@click.option("--plot-convergence", type=PlotPath())
 @overwrite_option
 @json_option
 def identify_cmd(modes_file, params_file, param_items, free, bounds, weights, seed, paper_ga, population, generations,
                  predict_n, min_confidence, csv_out, plot_fit, plot_convergence, overwrite, as_json):
     """Fit the model to MODES_FILE (a modal file from lsce, or a CSV with frequency_hz, n, branch)."""
+    refuse_input_as_output({"--csv": csv_out, "--plot-fit": plot_fit, "--plot-convergence": plot_convergence},
+                           {"MODES_FILE": modes_file, "--params": params_file})
     for o in (csv_out, plot_fit, plot_convergence):
         if o is not None:
             check_overwrite(o, overwrite)
@@ -75,7 +92,10 @@ def identify_cmd(modes_file, params_file, param_items, free, bounds, weights, se
         from dataclasses import replace
 
         opt = replace(opt, effects=effects)
-    modes, skipped = modes_from_rows(read_table_rows(modes_file), min_confidence=min_confidence, source=str(modes_file))
+    rows = read_table_rows(modes_file)
+    modes, skipped = modes_from_rows(rows, min_confidence=min_confidence, source=str(modes_file))
+    if not modes:
+        raise DataFormatError(no_usable_modes(modes_file, rows, skipped))
     bar = Progress("identify")
     try:
         res = fit(modes, base, opt, progress=bar)

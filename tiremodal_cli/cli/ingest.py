@@ -7,10 +7,11 @@ from pathlib import Path
 import click
 
 from ..errors import ParameterError
+from ..files import refuse_input_as_output
 from ..ingest import read_source, source_kind
 from ..measurement import describe, write_measurement
 from .main import cli
-from .options import echo_json, json_option, overwrite_option
+from .options import FiniteRange, echo_json, json_option, overwrite_option
 
 
 @cli.command("ingest")
@@ -23,12 +24,20 @@ from .options import echo_json, json_option, overwrite_option
               help="TOML/JSON with [points] (key → angle_deg) and [channels] (key → name, location, angle_deg).")
 @click.option("--channel", "channel_opts", multiple=True, metavar="KEY=NAME,LOCATION,ANGLE_DEG",
               help="A channel (UFF key NODE:DIR, CSV key the column name); repeatable.")
-@click.option("--pressure", type=float, help="Inflation pressure to record, Pa.")
+@click.option("--pressure", type=FiniteRange(0, min_open=True), help="Inflation pressure to record, Pa (> 0).")
 @click.option("--tire", help="Free text: size, model, serial.")
 @overwrite_option
 @json_option
 def ingest_cmd(sources, output, source_kind_opt, mapping, channel_opts, pressure, tire, overwrite, as_json):
     """Convert SOURCES (UFF 58 files/folders, or one CSV folder) into a measurement file."""
+    refuse_input_as_output({"--output": output}, {**{f"source {str(s)!r}": s for s in sources}, "--mapping": mapping})
+    for s in sources:
+        if not s.exists():
+            raise ParameterError(f"source {str(s)!r}: no such file or folder")
+    if source_kind_opt == "auto" and all(s.is_dir() for s in sources) and source_kind(sources) == "uff" \
+            and not any(f.suffix.lower() in (".uff", ".unv") for s in sources for f in s.iterdir()):
+        raise ParameterError(f"source {', '.join(map(str, sources))!r}: no point*.csv nor *.uff/*.unv files; "
+                             "allowed: one folder of point*.csv files, or UFF 58 files/folders")
     kind = source_kind(sources) if source_kind_opt == "auto" else source_kind_opt
     attrs = dict(inflation_pressure=pressure, tire=tire, description=f"ingested from {kind}: "
                  + ", ".join(map(str, sources))[:200])

@@ -7,14 +7,14 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..files import check_overwrite, sha256_file, write_text_atomic
+from ..files import check_overwrite, refuse_input_as_output, sha256_file, write_text_atomic
 from ..frffile import read_frf, read_frf_uff
 from ..ingest import load_channel_map
 from ..modalfile import to_csv, to_rows, write_modal
 from ..modes import ModalOptions, modal_table_from_frf
 from ..stabilization import StabilizationOptions
 from .main import cli
-from .options import Progress, echo_json, json_option, overwrite_option
+from .options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option
 
 
 def read_any_frf(path: Path, mapping=None):
@@ -29,23 +29,26 @@ def read_any_frf(path: Path, mapping=None):
 @click.argument("frf_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="Modal file to write (HDF5).")
-@click.option("--band", nargs=2, type=float, metavar="LO HI", help="Analysis band, Hz (default: all lines > 0 Hz).")
+@band_option("Analysis band, Hz (default: all lines > 0 Hz).")
 @click.option("--max-order", type=click.IntRange(2, 400), default=120, show_default=True,
               help="Highest model order of the sweep (per circumferential order: at most 24).")
 @click.option("--spatial", type=click.Choice(["auto", "on", "off"]), default="auto", show_default=True,
               help="Split tyre FRFs into circumferential orders before the sweep.")
-@click.option("--tol-freq", type=float, default=0.01, show_default=True, help="Stability: relative frequency.")
-@click.option("--tol-damping", type=float, default=0.05, show_default=True, help="Stability: relative damping.")
-@click.option("--tol-mac", type=float, default=0.98, show_default=True, help="Stability: shape MAC.")
-@click.option("--min-significance", type=float, default=0.05, show_default=True,
+@click.option("--tol-freq", type=FiniteRange(0, 1, min_open=True), default=0.01, show_default=True,
+              help="Stability: relative frequency (0 < TOL ≤ 1).")
+@click.option("--tol-damping", type=FiniteRange(0, 1, min_open=True), default=0.05, show_default=True,
+              help="Stability: relative damping (0 < TOL ≤ 1).")
+@click.option("--tol-mac", type=FiniteRange(0, 1, min_open=True), default=0.98, show_default=True,
+              help="Stability: shape MAC (0 < MAC ≤ 1).")
+@click.option("--min-significance", type=FiniteRange(0, 1, max_open=True), default=0.05, show_default=True,
               help="Reject modes explaining less of the response at their frequency.")
 @click.option("--mapping", type=click.Path(exists=True, dir_okay=False),
               help="For UFF input: channel names/locations/angles and point angles (as for ingest).")
 @click.option("--csv", "csv_out", type=click.Path(dir_okay=False, path_type=Path), help="Also write the table as CSV.")
-@click.option("--plot-stabilization", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--plot-mac", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--plot-shapes", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--plot-synthesis", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--plot-stabilization", type=PlotPath())
+@click.option("--plot-mac", type=PlotPath())
+@click.option("--plot-shapes", type=PlotPath())
+@click.option("--plot-synthesis", type=PlotPath())
 @overwrite_option
 @json_option
 def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, tol_mac, min_significance, mapping,
@@ -55,6 +58,9 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, 
     Prints the modal table (text; --json: an object with the modes, the clusters of the
     stabilization and the rejected candidates).
     """
+    refuse_input_as_output({"--output": output, "--csv": csv_out, "--plot-stabilization": plot_stabilization,
+                            "--plot-mac": plot_mac, "--plot-shapes": plot_shapes, "--plot-synthesis": plot_synthesis},
+                           {"FRF_FILE": frf_file, "--mapping": mapping})
     outs = [output, csv_out, plot_stabilization, plot_mac, plot_shapes, plot_synthesis]
     for o in outs:
         if o is not None:

@@ -12,12 +12,12 @@ import numpy as np
 
 from ..config import load_mapping
 from ..errors import DataFormatError
-from ..files import check_overwrite, write_text_atomic
+from ..files import check_overwrite, refuse_input_as_output, write_text_atomic
 from ..mac import mac_matrix, subspace_mac
 from ..modalfile import read_modal
 from ..model import TyreParameters, observation, solve_modes
 from .main import cli
-from .options import echo_json, json_option, overwrite_option
+from .options import PlotPath, echo_json, json_option, overwrite_option
 
 
 def _labels(t):
@@ -56,19 +56,21 @@ def model_bases(params: TyreParameters, t, f_max, n_max=30):
 @cli.command("mac")
 @click.argument("modal_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.argument("other", required=False, type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--analytic", "analytic", type=click.IntRange(0), metavar="N_MAX",
+@click.option("--analytic", "analytic", type=click.IntRange(0, 200), metavar="N_MAX",
               help="Against the analytic shapes cos nθ, sin nθ, n = 0 … N_MAX (tread channel over the points).")
 @click.option("--model", "model_file", type=click.Path(exists=True, dir_okay=False),
               help="Against the tyre model's shapes; TOML/JSON of parameters (as for simulate's [params]).")
 @click.option("--channels", help="Channels to compare, comma-separated (default: all live in both).")
 @click.option("--csv", "csv_out", type=click.Path(dir_okay=False, path_type=Path), help="Write the matrix as CSV.")
-@click.option("--plot", "plot_out", type=click.Path(dir_okay=False, path_type=Path), help="Heat map (PNG/SVG).")
+@click.option("--plot", "plot_out", type=PlotPath(), help="Heat map (PNG/SVG).")
 @overwrite_option
 @json_option
 def mac_cmd(modal_file, other, analytic, model_file, channels, csv_out, plot_out, overwrite, as_json):
     """AutoMAC of MODAL_FILE, or cross-MAC against OTHER (a second modal file), --analytic or --model."""
     if sum(x is not None for x in (other, analytic, model_file)) > 1:
         raise click.UsageError("compare against one of OTHER, --analytic, --model")
+    refuse_input_as_output({"--csv": csv_out, "--plot": plot_out},
+                           {"MODAL_FILE": modal_file, "OTHER": other, "--model": model_file})
     for o in (csv_out, plot_out):
         if o is not None:
             check_overwrite(o, overwrite)

@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from ..files import dumps  # noqa: F401  (re-exported for the commands)
+from ..modalfile import no_usable_modes  # noqa: F401  (re-exported for the commands)
 
 overwrite_option = click.option("--overwrite", is_flag=True,
                                 help="Replace existing outputs (refused otherwise).")
@@ -103,3 +104,57 @@ def rows_to_csv(rows, fieldnames=None) -> str:
     w.writeheader()
     w.writerows(rows)
     return buf.getvalue()
+
+
+class FiniteRange(click.FloatRange):
+    """A float option in a range that is also finite (click's FloatRange lets nan and inf by)."""
+
+    name = "float"
+
+    def convert(self, value, param, ctx):
+        import math
+
+        rv = super().convert(value, param, ctx)
+        if not math.isfinite(rv):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return rv
+
+
+def _plot_formats() -> dict:
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    return FigureCanvasBase.get_supported_filetypes()
+
+
+class PlotPath(click.Path):
+    """An output figure's path whose suffix names a format matplotlib writes (checked
+    before any work is done)."""
+
+    def __init__(self):
+        super().__init__(dir_okay=False, path_type=Path)
+
+    def convert(self, value, param, ctx):
+        rv = super().convert(value, param, ctx)
+        fmt = Path(rv).suffix.lower().lstrip(".")
+        allowed = _plot_formats()
+        if fmt not in allowed:
+            self.fail(f"{str(value)!r}: format {fmt or '(no suffix)'!r} is not one a figure can be written in; "
+                      f"allowed: {', '.join(sorted(allowed))}", param, ctx)
+        return rv
+
+
+def band_option(help_text: str, **kw):
+    """--band LO HI (Hz): finite, 0 ≤ LO < HI."""
+
+    def check(ctx, param, value):
+        if not value:
+            return value
+        import math
+
+        lo, hi = value
+        if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
+            raise click.BadParameter(f"{lo:g} {hi:g}: allowed: finite 0 ≤ LO < HI (Hz)", ctx, param)
+        return value
+
+    return click.option("--band", nargs=2, type=float, metavar="LO HI", callback=check, help=help_text, **kw)
+

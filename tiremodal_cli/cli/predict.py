@@ -7,28 +7,30 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..files import check_overwrite, write_text_atomic
+from ..files import check_overwrite, refuse_input_as_output, write_text_atomic
 from ..model import paper_damping, solve_modes
 from .main import cli
-from .options import echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
+from .options import FiniteRange, PlotPath, echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
 
 
 @cli.command("predict")
 @params_options
 @click.option("--n-max", type=click.IntRange(1, 200), default=12, show_default=True, help="Highest order listed.")
 @click.option("--csv", "csv_out", type=click.Path(dir_okay=False, path_type=Path), help="Write the table as CSV.")
-@click.option("--plot", "plot_out", type=click.Path(dir_okay=False, path_type=Path), help="Frequency against n.")
+@click.option("--plot", "plot_out", type=PlotPath(), help="Frequency against n.")
 @click.option("--compare-frf", type=click.Path(dir_okay=False, path_type=Path),
               help="An FRF file: draw the model's FRFs over the measured ones (the paper's Fig. 9).")
-@click.option("--plot-frf", type=click.Path(dir_okay=False, path_type=Path), help="Where to draw that comparison.")
+@click.option("--plot-frf", type=PlotPath(), help="Where to draw that comparison.")
 @click.option("--point", type=click.IntRange(1), default=1, show_default=True, help="Impact point of the comparison.")
-@click.option("--damping", type=click.FloatRange(0, 1, min_open=True, max_open=True),
+@click.option("--damping", type=FiniteRange(0, 1, min_open=True, max_open=True),
               help="Modal damping for the model's FRFs (default: the paper's by n and branch).")
 @overwrite_option
 @json_option
 def predict_cmd(params_file, param_items, n_max, csv_out, plot_out, compare_frf, plot_frf, point, damping, overwrite,
                 as_json):
     """Modes of the model: frequency of every (n, branch) up to --n-max (the cos members)."""
+    refuse_input_as_output({"--csv": csv_out, "--plot": plot_out, "--plot-frf": plot_frf},
+                           {"--params": params_file, "--compare-frf": compare_frf})
     for o in (csv_out, plot_out, plot_frf):
         if o is not None:
             check_overwrite(o, overwrite)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import click
@@ -10,7 +11,14 @@ from ..errors import OutputExistsError
 from ..files import refuse_input_as_output
 from ..pipeline import MANIFEST, OUTPUTS, RunOptions, run_folder
 from .main import cli
-from .options import echo_json, json_option, load_params, params_options
+from .options import FiniteRange, band_option, echo_json, json_option, load_params, params_options
+
+
+def _stage_message(stage: str) -> None:
+    """'run: STAGE …' on a terminal (as a progress bar would be); nothing in a log, whose
+    stderr is for the result's one line."""
+    if sys.stderr.isatty():
+        click.echo(f"run: {stage} …", err=True)
 
 
 @cli.command("run")
@@ -18,12 +26,12 @@ from .options import echo_json, json_option, load_params, params_options
 @click.option("-o", "--output", "outdir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Folder for every stage's output.")
 @params_options
-@click.option("--band", nargs=2, type=float, metavar="LO HI", help="lsce band, Hz (default 0.04 fs … 0.293 fs).")
-@click.option("--exp-end", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.05,
+@band_option("lsce band, Hz (default 0.04 fs … 0.293 fs; at most 0.3125 fs, the FRFs' top).")
+@click.option("--exp-end", type=FiniteRange(0, 1, min_open=True, max_open=True), default=0.05,
               show_default=True, help="Exponential window's value at the record's end (corrected in lsce).")
 @click.option("--no-exp-window", is_flag=True, help="No exponential window.")
 @click.option("--seed", type=int, default=0, show_default=True)
-@click.option("--noise-floor-pct", type=click.FloatRange(0, 100, min_open=True), default=0.1, show_default=True)
+@click.option("--noise-floor-pct", type=FiniteRange(0, 100, min_open=True), default=0.1, show_default=True)
 @click.option("--max-effects", type=click.IntRange(0, 5), default=2, show_default=True)
 @click.option("--p0-from-params", is_flag=True,
               help="Model P0 from the parameters, not the inflation pressure the measurement records.")
@@ -51,7 +59,7 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
     opt = RunOptions(band=tuple(band) if band else None, exp_end=None if no_exp_window else exp_end, seed=seed,
                      noise_floor_pct=noise_floor_pct, max_effects=max_effects, pressure_from_file=not p0_from_params)
     summary = run_folder(measurement, outdir, opt, params=base, overwrite=overwrite,
-                         progress=lambda s: click.echo(f"run: {s} …", err=True))
+                         progress=_stage_message)
     if as_json:
         echo_json(summary)
         return

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import math
+
 import click
 
-from ..files import check_overwrite, write_text_atomic
+from ..files import check_overwrite, refuse_input_as_output, write_text_atomic
 from ..sensitivity import PAPER_STUDY, coefficients, single_variable
 from .main import cli
-from .options import echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
+from .options import PlotPath, echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
 
 
 @cli.command("sensitivity")
@@ -18,11 +20,12 @@ from .options import echo_json, json_option, load_params, overwrite_option, para
 @click.option("--factors", default="0.8,1.0,1.2", show_default=True, help="Scale factors of the single-variable study.")
 @click.option("--n-max", type=click.IntRange(1, 100), default=10, show_default=True)
 @click.option("--csv", "csv_out", type=click.Path(dir_okay=False, path_type=Path), help="Study table as CSV.")
-@click.option("--plot", "plot_out", type=click.Path(dir_okay=False, path_type=Path), help="∂ln f/∂ln p against n.")
+@click.option("--plot", "plot_out", type=PlotPath(), help="∂ln f/∂ln p against n.")
 @overwrite_option
 @json_option
 def sensitivity_cmd(params_file, param_items, parameters, factors, n_max, csv_out, plot_out, overwrite, as_json):
     """How each parameter moves the frequencies (80/100/120 % study and normalised coefficients)."""
+    refuse_input_as_output({"--csv": csv_out, "--plot": plot_out}, {"--params": params_file})
     for o in (csv_out, plot_out):
         if o is not None:
             check_overwrite(o, overwrite)
@@ -32,6 +35,10 @@ def sensitivity_cmd(params_file, param_items, parameters, factors, n_max, csv_ou
         facs = tuple(float(x) for x in factors.split(","))
     except ValueError:
         raise click.BadParameter(f"{factors!r} is not a list of numbers", param_hint="--factors") from None
+    bad = [x for x in facs if not (math.isfinite(x) and x > 0)]
+    if bad or not facs:
+        raise click.BadParameter(f"{factors!r}: factor {bad[0] if bad else None!r}; allowed: positive finite scale factors",
+                                 param_hint="--factors")
     study = single_variable(p, names, facs, n_max, effects or None)
     ns, br, S = coefficients(p, names, n_max, effects or None)
     if csv_out:

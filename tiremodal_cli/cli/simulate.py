@@ -11,13 +11,13 @@ import numpy as np
 from ..config import load_mapping
 from ..effects import EFFECTS
 from ..errors import ParameterError
-from ..files import atomic_path, check_overwrite, write_text_atomic
+from ..files import atomic_path, check_overwrite, check_size, refuse_input_as_output, write_text_atomic
 from ..ingest.uff import write_uff_time
 from ..measurement import write_measurement
 from ..model import TyreParameters
 from ..simulate import Channel, Faults, SimulationConfig, simulate
 from .main import cli
-from .options import Progress, dumps, echo_json, json_option, overwrite_option, parse_key_values
+from .options import FiniteRange, Progress, dumps, echo_json, json_option, overwrite_option, parse_key_values
 
 _SCALARS = {f.name for f in dataclasses.fields(SimulationConfig)} - {"params", "effects", "faults", "channels"}
 
@@ -50,6 +50,49 @@ def _effects(specs) -> dict:
     return out
 
 
+def _typed_scalars(scal: dict, where: str) -> dict:
+    """The config file's scalars checked against SimulationConfig's field types: an int field
+    takes an integer (not a bool), a float field a finite number, a str field text, a bool
+    field true/false; None where the default is None (damping)."""
+    import math
+    import typing
+
+    hints = typing.get_type_hints(SimulationConfig)
+    out = {}
+    for k, v in scal.items():
+        t = hints[k]
+        args = typing.get_args(t)
+        if type(None) in args and v is None:
+            out[k] = None
+            continue
+        base = next((a for a in args if a is not type(None)), t)
+        ok = {int: isinstance(v, int) and not isinstance(v, bool),
+              float: isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v),
+              str: isinstance(v, str), bool: isinstance(v, bool)}.get(base, True)
+        if not ok:
+            want = {int: "an integer", float: "a finite number", str: "text", bool: "true or false"}[base]
+            raise ParameterError(f"{where}: {k} = {v!r} is not allowed; allowed: {want}")
+        out[k] = float(v) if base is float else v
+    return out
+
+
+def estimate_bytes(cfg: SimulationConfig) -> float:
+    """Upper estimate of the memory a simulation holds at once, bytes.
+
+    The model's modes (dense shapes: (2 + 1) dofs × 2 harmonics per order, squared, float64),
+    the FRFs of every channel and point (complex128) with the modal sum's per-mode terms over
+    the frequency lines, and the records (force and responses, float64, with the noise and
+    type-conversion copies: ×3).
+    """
+    n_modes = 6.0 * (cfg.n_max + 1)
+    n_f = cfg.n_samples // 2 + 1
+    n_c = len(cfg.channels)
+    shapes = 12.0 * n_modes**2  # the shapes and the eigensolver's workspace (measured: n_max 1000 → 0.38 GiB)
+    frfs = 16.0 * n_f * (n_c * cfg.n_points + n_modes)
+    records = 3 * 8.0 * cfg.n_points * cfg.n_hits * (n_c + 1) * cfg.n_samples
+    return shapes + frfs + records
+
+
 def build_config(config_file, overrides: dict, params: dict, effects: dict, faults: dict) -> SimulationConfig:
     """Merge a TOML/JSON file with command-line values into a SimulationConfig."""
     data = load_mapping(config_file) if config_file else {}
@@ -57,7 +100,7 @@ def build_config(config_file, overrides: dict, params: dict, effects: dict, faul
     if unknown:
         raise ParameterError(f"{config_file}: unknown key {unknown[0]!r}; allowed: "
                              f"{', '.join(sorted(_SCALARS | {'params', 'effects', 'faults', 'channels'}))}")
-    scal = {k: v for k, v in data.items() if k in _SCALARS}
+    scal = _typed_scalars({k: v for k, v in data.items() if k in _SCALARS}, str(config_file))
     scal.update({k: v for k, v in overrides.items() if v is not None})
     p = TyreParameters.from_mapping({**data.get("params", {}), **params})
     eff = {**data.get("effects", {}), **effects}
@@ -90,14 +133,16 @@ def _toml(mapping: dict) -> str:
 @click.option("--truth", type=click.Path(dir_okay=False, path_type=Path),
               help="Truth JSON (default: OUTPUT with suffix .truth.json).")
 @click.option("--seed", type=int, help="Random seed (default 0).")
-@click.option("--points", "n_points", type=click.IntRange(2), help="Impact points (default 34).")
+@click.option("--points", "n_points", type=click.IntRange(2),
+              help="Impact points (default 34; with --hits, --samples and --n-max bounded by memory: "
+                   "the estimate must fit a quarter of this machine's memory, at most 8 GiB).")
 @click.option("--hits", "n_hits", type=click.IntRange(1, 100), help="Hits per point (default 3).")
-@click.option("--sample-rate", type=click.FloatRange(min=1, min_open=False), help="Hz (default 2048).")
-@click.option("--samples", "n_samples", type=click.IntRange(64), help="Samples per record (default 4096).")
-@click.option("--noise", type=click.FloatRange(0), help="Sensor noise, std relative to each record's RMS.")
-@click.option("--damping", type=click.FloatRange(0, 1, min_open=True, max_open=True),
+@click.option("--sample-rate", type=FiniteRange(min=1, min_open=False), help="Hz (default 2048).")
+@click.option("--samples", "n_samples", type=click.IntRange(64), help="Samples per record (default 4096; bounded by memory).")
+@click.option("--noise", type=FiniteRange(0), help="Sensor noise, std relative to each record's RMS.")
+@click.option("--damping", type=FiniteRange(0, 1, min_open=True, max_open=True),
               help="One modal damping ratio for all modes (default: the paper's, 1.6–3.8 %).")
-@click.option("--n-max", type=click.IntRange(1), help="Highest circumferential order (default 30).")
+@click.option("--n-max", type=click.IntRange(1), help="Highest circumferential order (default 30; bounded by memory).")
 @click.option("--param", "params", multiple=True, metavar="NAME=VALUE",
               help="Model parameter, e.g. k_r1=6.7e6 or m_w=clamped (repeatable).")
 @click.option("--effect", "effects", multiple=True, metavar="NAME[:P=V,...]",
@@ -120,11 +165,15 @@ def simulate_cmd(output, config_file, truth, seed, n_points, n_hits, sample_rate
     Writes OUTPUT and a truth JSON beside it: every mode below Nyquist with n, branch,
     frequency, damping and shape, the parameters, effects and faults injected.
     """
+    refuse_input_as_output({"OUTPUT": output, "--truth": truth or output.with_suffix(".truth.json"), "--uff-dir": uff_dir},
+                           {"--config": config_file})
     overrides = dict(seed=seed, n_points=n_points, n_hits=n_hits, sample_rate=sample_rate,
                      n_samples=n_samples, noise=noise, damping=damping, n_max=n_max, dtype=dtype)
     faults = dict(double_hits=_pairs(double_hit, 2, "--double-hit"), clipped=_pairs(clip, 3, "--clip"),
                   dead_channel=dead_channel, missing_point=missing_point)
     cfg = build_config(config_file, overrides, parse_key_values(params, "--param"), _effects(effects), faults)
+    check_size(estimate_bytes(cfg), f"--points {cfg.n_points} × --hits {cfg.n_hits} × --samples {cfg.n_samples}, "
+                                    f"--n-max {cfg.n_max}")
     truth = truth or output.with_suffix(".truth.json")
     check_overwrite(output, overwrite)
     check_overwrite(truth, overwrite)
