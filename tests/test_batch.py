@@ -305,3 +305,86 @@ def test_second_batch_on_one_outdir_is_refused(tmp_path):
         fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
         with pytest.raises(ParameterError, match="another batch is writing there"):
             run_batch([tmp_path / "a"], out)
+
+
+def test_workers_die_with_a_killed_parent_and_hold_the_lock_until_then(tmp_path, campaign):
+    """SIGKILL of the batch process alone (not its group): its forkserver and workers end
+    within a second, install nothing after, and a new batch is refused only while they live."""
+    psutil = pytest.importorskip("psutil")
+    root, tree, _, _ = campaign
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "tiremodal_cli", "batch", str(tree), "-o", str(out), "--jobs", "2",
+           "--config", str(root / "fast.toml"), "--no-plots"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and proc.poll() is None:  # both workers busy with a test
+            if (out / ".partial").is_dir() and len(list((out / ".partial").iterdir())) >= 2:
+                break
+            time.sleep(0.02)
+        assert proc.poll() is None, "the batch finished first"
+        kids = psutil.Process(proc.pid).children(recursive=True)
+        assert len(kids) >= 3  # the forkserver (and resource tracker) and the two workers
+        proc.kill()  # the parent alone
+        proc.wait()
+        t0 = time.monotonic()
+        gone, alive = psutil.wait_procs(kids, timeout=10)
+        took = time.monotonic() - t0
+        assert not alive, f"still running {took:.1f} s after the parent died: {[p.pid for p in alive]}"
+        assert took < 3
+        installed = _outputs(out)
+        time.sleep(1.0)
+        assert _outputs(out) == installed  # nothing installed after the workers were gone
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL) if proc.poll() is None else None
+        for p in psutil.Process().children(recursive=True):
+            if p.pid != os.getpid() and p.cmdline()[:1] == [sys.executable] and str(out) in " ".join(p.cmdline()):
+                p.kill()
+    recs = run_batch([tree], out, load_config(root / "fast.toml"), jobs=1, plots=False)  # the lock is free
+    assert sum(r["status"] in ("done", "skipped") for r in recs) == len(GOOD)
+
+
+def test_worker_lock_of_a_killed_batch_refuses_a_new_one(tmp_path):
+    """While a worker of a dead batch still holds its shared lock, a new batch is refused."""
+    import fcntl
+
+    simulate_campaign(tmp_path / "a", [8e5], seed=1)
+    out = tmp_path / "out"
+    out.mkdir()
+    with open(out / ".lock.workers", "a+") as fh:
+        fcntl.flock(fh, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        with pytest.raises(ParameterError, match="workers of an earlier batch are still running"):
+            run_batch([tmp_path / "a"], out)
+
+
+def test_relative_paths_reach_a_scheduler_absolute(tmp_path, monkeypatch):
+    """A remote worker runs in another working folder: the jobs it gets name absolute paths
+    (a relative one failed every test and left '.partial' in the worker's folder)."""
+    import contextlib
+
+    import tiremodal_cli.batch as batch
+
+    simulate_campaign(tmp_path / "data" / "a", [8e5], seed=1)
+    elsewhere = tmp_path / "worker_cwd"
+    elsewhere.mkdir()
+    seen = []
+
+    @contextlib.contextmanager
+    def remote(jobs=1, scheduler=None, **kw):
+        class Remote(batch.SerialExecutor):
+            def submit(self, fn, job):
+                seen.append(job)
+                here = os.getcwd()
+                os.chdir(elsewhere)  # the worker's own folder
+                try:
+                    return super().submit(lambda j: batch.record(j.test, "done"), job)
+                finally:
+                    os.chdir(here)
+        yield Remote()
+
+    monkeypatch.setattr(batch, "executor", remote)
+    monkeypatch.chdir(tmp_path)
+    batch.run_batch([Path("data")], Path("out"), scheduler="tcp://nowhere:1", plots=False)
+    assert seen and all(j.test.path.is_absolute() and j.outdir.is_absolute() and j.partial.is_absolute()
+                        for j in seen)
+    assert all(j.test.path.exists() for j in seen)

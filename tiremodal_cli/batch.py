@@ -47,6 +47,7 @@ SUMMARY_CSV = "summary.csv"
 SUMMARY_JSONL = "summary.jsonl"
 PARTIAL = ".partial"
 LOCK = ".lock"
+WORKERS_LOCK = ".lock.workers"
 MEASUREMENT_SUFFIXES = (".h5", ".hdf5", ".hdf")
 #: tiremodal's own outputs: found under a tree, they are not tests
 _OUTPUT_FORMATS = ("tiremodal.frf", "tiremodal.modal")
@@ -284,14 +285,68 @@ class SerialExecutor(cf.Executor):
         return f
 
 
+_WORKER_LOCK = None  # a worker's shared lock on OUTDIR/.lock.workers (held for its life)
+
+
+def _die_with(parent_pid: int) -> None:
+    """Make this process end when ``parent_pid`` (the batch) ends, even by SIGKILL.
+
+    On Linux, PR_SET_PDEATHSIG asks the kernel for SIGKILL when the parent (the
+    forkserver, which exits at once when the batch does) dies; everywhere, a daemon
+    thread checks every 0.2 s that the batch is alive and ends the worker when not.
+    """
+    import sys
+    import threading
+
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            PR_SET_PDEATHSIG = 1
+            libc.prctl(PR_SET_PDEATHSIG, 9, 0, 0, 0)  # SIGKILL
+        except (OSError, AttributeError):  # no libc prctl: the thread below still watches
+            pass
+
+    def watch():
+        while True:
+            try:
+                os.kill(parent_pid, 0)
+            except ProcessLookupError:
+                os._exit(137)
+            except PermissionError:  # alive, another user's (cannot happen for our parent)
+                pass
+            time.sleep(0.2)
+
+    threading.Thread(target=watch, name="tiremodal-parent-watch", daemon=True).start()
+
+
+def _worker_init(parent_pid: int, workers_lock: str | None) -> None:
+    """A pool worker's start: die with the batch; hold a shared lock on ``workers_lock``
+    so that no other batch takes OUTDIR while this worker lives (see :func:`_lock`)."""
+    global _WORKER_LOCK
+    _die_with(parent_pid)
+    if workers_lock is not None:
+        try:
+            import fcntl
+        except ImportError:
+            return
+        _WORKER_LOCK = open(workers_lock, "a+")
+        fcntl.flock(_WORKER_LOCK, fcntl.LOCK_SH)
+
+
 @contextlib.contextmanager
-def executor(jobs: int = 1, scheduler: str | None = None) -> Iterator[cf.Executor]:
+def executor(jobs: int = 1, scheduler: str | None = None, *, workers_lock=None) -> Iterator[cf.Executor]:
     """A ``concurrent.futures.Executor`` for the jobs.
 
     scheduler : address of a Dask scheduler (``tcp://host:8786``): the jobs go to its
         workers through ``distributed.Client.get_executor()``. The workers must see the
         same paths (a shared file system) and have tiremodal installed.
     jobs : local worker processes when no scheduler is given (1: in this process).
+    workers_lock : a file each local worker holds a shared lock on while it lives (the batch
+        takes it exclusively before it starts: a batch killed with SIGKILL keeps its OUTDIR
+        locked until its workers are gone). Local workers end with the batch, also when it
+        is killed with SIGKILL (:func:`_die_with`).
     """
     if scheduler:
         try:
@@ -315,7 +370,9 @@ def executor(jobs: int = 1, scheduler: str | None = None) -> Iterator[cf.Executo
     import multiprocessing as mp
 
     # forkserver: workers start from a clean process (no inherited BLAS or lock state)
-    pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("forkserver"))
+    pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("forkserver"),
+                                  initializer=_worker_init,
+                                  initargs=(os.getpid(), None if workers_lock is None else str(workers_lock)))
     try:
         yield pool
     except BaseException:
@@ -349,6 +406,13 @@ def _lock(outdir: Path):
             fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             raise ParameterError(f"{outdir}: another batch is writing there (lock {outdir / LOCK})") from None
+        # workers of a batch killed with SIGKILL hold this one (shared) until they are gone
+        with open(outdir / WORKERS_LOCK, "a+") as wl:
+            try:
+                fcntl.flock(wl, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                raise ParameterError(f"{outdir}: workers of an earlier batch are still running there "
+                                     f"(lock {outdir / WORKERS_LOCK}); try again when they are gone") from None
         yield
     finally:
         fh.close()
@@ -398,6 +462,8 @@ def run_batch(roots: Sequence, outdir, config: BatchConfig = BatchConfig(), *, j
         No tests found, a root missing, OUTDIR is a file or locked by another batch.
     """
     outdir = Path(outdir)
+    if scheduler:  # a remote worker's working folder is not ours: every path it sees is absolute
+        roots, outdir = [Path(os.path.abspath(r)) for r in roots], Path(os.path.abspath(outdir))
     if outdir.exists() and not outdir.is_dir():
         raise ParameterError(f"{outdir}: exists and is not a folder")
     tests = discover(roots, exclude=[outdir])
@@ -419,7 +485,7 @@ def run_batch(roots: Sequence, outdir, config: BatchConfig = BatchConfig(), *, j
             if progress:
                 progress(r, i + 1, total)
         if todo:
-            with executor(jobs, scheduler) as ex:
+            with executor(jobs, scheduler, workers_lock=outdir / WORKERS_LOCK) as ex:
                 futures = {ex.submit(run_one, j): j for j in todo}
                 for fut in cf.as_completed(futures):
                     j = futures[fut]

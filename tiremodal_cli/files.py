@@ -40,13 +40,18 @@ def _same_or_inside(out: Path, inp: Path) -> bool:
     return i.is_dir() and i in o.parents
 
 
-def refuse_input_as_output(outputs, inputs) -> None:
+def refuse_input_as_output(outputs, inputs, *, read_from_folder=None) -> None:
     """Refuse an output that is one of the inputs or lies inside an input folder.
 
     Parameters
     ----------
     outputs : mapping option name → path (None entries ignored), e.g. ``{"-o": out, "--plot": p}``
     inputs : mapping name → path of what the command reads (None entries ignored)
+    read_from_folder : callable(path) → bool, optional
+        For commands that read a folder's files by pattern (``ingest``): an output inside
+        an input folder is then refused only when it exists already (it would replace a
+        file of the folder) or the command would read it (it would join the input);
+        without it, any output inside an input folder is refused.
 
     Raises
     ------
@@ -62,6 +67,9 @@ def refuse_input_as_output(outputs, inputs) -> None:
             if inp is None:
                 continue
             if _same_or_inside(Path(out), Path(inp)):
+                if (read_from_folder is not None and Path(inp).is_dir() and not Path(out).exists()
+                        and not read_from_folder(Path(out))):
+                    continue
                 rel = "is" if Path(out).resolve() == Path(inp).resolve() else "is inside"
                 raise ParameterError(f"{opt} {str(out)!r} {rel} the input {what} {str(inp)!r}; "
                                      "an input is never replaced: choose another output")

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import DataFormatError, ParameterError
-from .hits import _clip_count, double_hit, pulse_extent
+from .hits import _clip_count, bounce_in_pulse, double_hit, pulse_extent
 from .windows import exponential_window, force_window
 
 log = logging.getLogger(__name__)
@@ -292,6 +292,32 @@ def _time_checks(f, y, fs, opt, names, ip):
     return rej, bad, pk_y, extent
 
 
+def _test_wide_checks(m, fs, opt):
+    """Checks over every hit of the test: a bounce within the pulse (:func:`bounce_in_pulse`
+    on all force records at once; the force alone, so memory is the force records').
+
+    Returns {point: [(hit, notch_hz), ...]} and the checks that could not run, each said once
+    (a warning, and ``meta["checks_not_run"]``): the bounce check with fewer than 5 usable
+    hits in the test, the consistency check with fewer than 3 hits per point.
+    """
+    out, not_run = {}, []
+    if not opt.check_hits:
+        return out, not_run
+    n_p, n_h = m.n_points, m.n_hits
+    flags, notch, ran = bounce_in_pulse(np.asarray(m.force, dtype=float).reshape(n_p * n_h, -1), fs,
+                                        min_relative=opt.double_hit_relative)
+    if not ran:
+        not_run.append(f"double hits within the pulse (force spectrum): needs at least 5 usable hits in the test, "
+                       f"it has {n_p * n_h}")
+    for k in np.flatnonzero(flags):
+        out.setdefault(int(k) // n_h, []).append((int(k) % n_h, float(notch[k])))
+    if n_h < 3:
+        not_run.append(f"consistency of the hits: needs at least 3 hits per point, the test has {n_h}")
+    for what in not_run:
+        log.warning("hit check not run: %s", what)
+    return out, not_run
+
+
 def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResult:
     """The FRF stage: checks, windows, spectra and averaging over the accepted hits.
 
@@ -331,10 +357,16 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
     coh = np.full((n_c, n_p, nf), np.nan)
     n_avg = np.zeros(n_p, dtype=int)
     rejections, peaks = [], np.zeros((n_p, n_h, n_c))
+    bounce, not_run = _test_wide_checks(m, fs, opt)
     for ip in range(n_p):
         f = np.asarray(m.force[ip], dtype=real)
         y = np.asarray(m.response[ip], dtype=real)
         rej, bad, peaks[ip], extent = _time_checks(f, y, fs, opt, names, ip)
+        for h, notch in bounce.get(ip, ()):
+            if not bad[h]:
+                rej.append(Rejection(ip, h, f"double hit (a bounce within the pulse: force spectrum notch at "
+                                            f"{notch:.0f} Hz)", "force"))
+                bad[h] = True
         rejections += rej
         acc = np.flatnonzero(~bad)
         if acc.size:
@@ -397,7 +429,8 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
                              if opt.force_window_s is None else "given"},
             "exponential_window": None if tau is None else {"tau_s": tau, "end_value": float(exp_w[-1]),
                                                             "added_decay_rate_per_s": 1.0 / tau},
-            "failed_points": [int(i) for i in failed], "precision": np.dtype(real).name}
+            "failed_points": [int(i) for i in failed], "precision": np.dtype(real).name,
+            "checks_not_run": not_run}
     return FRFResult(freq_hz=fq, H=Hf, coherence=coh, n_averages=n_avg[keep_p],
                      point_index=np.flatnonzero(keep_p), point_angle=np.asarray(m.point_angle)[keep_p],
                      channel_name=names, channel_location=tuple(m.channel_location),

@@ -114,3 +114,87 @@ def double_hit(force, fs: float, *, min_relative: float = 0.2, extent=None) -> n
         later = tail.max() if rec[ipk] > 0 else -tail.min()
         out[i] = later >= min_relative * pk
     return out.reshape(f.shape[:-1])
+
+
+def bounce_in_pulse(force, fs: float, *, min_relative: float = 0.2, band_top: float | None = None,
+                    false_alarm: float = 1e-3, min_hits: int = 5):
+    """Double hits whose bounce overlaps the first pulse, by the force spectrum's notch.
+
+    A bounce ``dt`` after the blow, of relative size ``a``, multiplies the force spectrum
+    by ``|1 + a e^{−i2πf dt}|``: a notch to ``1 − a`` at ``f = 1/(2 dt)``, inside the band
+    for every ``dt > 1/(2 band_top)`` (≥ 1.6 ms at 1,024 Hz). One hammer's clean blows
+    share a spectral shape (same tip, same structure) up to their width's scatter, so each
+    hit's spectrum (normalised to its own level at 0 Hz) is compared, line by line, with the
+    test's median. A bounce is a line where the hit falls to at most ``(1 − a)/(1 + a)`` of
+    the median — the notch of a second blow of ``a = min_relative`` of the first, the size
+    :func:`double_hit` calls a second blow after the pulse — and where that dip is also
+    significant: more than ``z`` robust standard deviations of that line across the hits. The comparison is of amplitudes,
+    not logarithms: force noise adds to the amplitude a Gaussian of known spread, while
+    the log of a noisy amplitude has a long lower tail (false notches where noise cancels). ``z`` is the Gaussian quantile of
+    ``false_alarm`` (per test) shared out (Bonferroni) over the hits and the independent
+    lines (the segment's length × the band); each line's deviation is also floored by the
+    force noise (from the record away from the pulse) relative to that line's level.
+
+    Parameters
+    ----------
+    force : (n_records, n_samples) array, N   every hit of the test
+    fs : float, Hz
+    band_top : highest frequency looked at, Hz (default 0.3125 fs: below a front end's
+        anti-alias corner, where a single blow's spectrum is the hammer's, not the filter's)
+    false_alarm : probability that a test of clean hits has one flagged
+    min_relative : smallest second blow, relative to the first, that counts as a bounce
+    min_hits : fewest finite, non-zero records the comparison needs (a median and a spread)
+
+    Returns
+    -------
+    flags : (n_records,) bool
+    notch_hz : (n_records,) float   frequency of each record's deepest dip (NaN: none)
+    ran : bool   False when the test has too few usable hits (nothing flagged then)
+    """
+    from scipy.special import ndtri
+
+    f = np.asarray(force, dtype=float)
+    n, ns = f.shape
+    flags = np.zeros(n, dtype=bool)
+    notch = np.full(n, np.nan)
+    ok = np.isfinite(f).all(axis=1) & (np.abs(f).max(axis=1) > 0)
+    if ok.sum() < min_hits:
+        return flags, notch, False
+    band_top = 0.3125 * fs if band_top is None else band_top
+    pre, post = int(np.ceil(0.005 * fs)), int(np.ceil(0.02 * fs))  # a blow and a bounce of ≤ 20 ms
+    L = pre + post
+    nfft = 1 << int(np.ceil(np.log2(8 * L)))
+    freq = np.fft.rfftfreq(nfft, 1 / fs)
+    sel = freq <= band_top
+    ipk = np.argmax(np.abs(np.where(np.isfinite(f), f, 0)), axis=1)
+    seg = np.zeros((n, L))
+    noise = np.zeros(n)
+    idx = np.arange(ns)
+    for i in np.flatnonzero(ok):
+        lo = ipk[i] - pre
+        take = np.arange(lo, lo + L)
+        inside = (take >= 0) & (take < ns)
+        seg[i, inside] = f[i, take[inside]]
+        away = f[i, (idx < lo) | (idx >= lo + L)]
+        noise[i] = 1.4826 * np.median(np.abs(away - np.median(away))) if away.size else 0.0
+    S = np.abs(np.fft.rfft(seg, n=nfft, axis=1))[:, sel]
+    level = S[:, 0:1].copy()
+    level[level <= 0] = np.nan
+    x = S / level  # each blow's spectrum shape, 1 at 0 Hz
+    good = ok & np.isfinite(level[:, 0])
+    r = x - np.median(x[good], axis=0)
+    spread = 1.4826 * np.median(np.abs(r[good]), axis=0)
+    # additive noise moves |S| by a Gaussian of std σ √(L/2) (its component along S)
+    rel_noise = np.median(noise[good] * np.sqrt(L / 2) / level[good, 0])
+    s = np.maximum(spread, rel_noise)
+    n_lines = max(1, int(np.ceil(L * band_top / fs)))  # independent lines of an L-sample segment
+    z = float(ndtri(1 - false_alarm / (good.sum() * n_lines)))
+    med = np.median(x[good], axis=0)
+    deep = (1 - min_relative) / (1 + min_relative)
+    for i in np.flatnonzero(good):
+        hit = (r[i] < -z * s) & (x[i] <= deep * med)
+        if hit.any():
+            k = int(np.argmin(np.where(hit, x[i] / np.maximum(med, np.finfo(float).tiny), np.inf)))
+            flags[i] = True
+            notch[i] = freq[sel][k]
+    return flags, notch, True

@@ -89,7 +89,7 @@ class RunOptions:
             if (not isinstance(v, (list, tuple)) or len(v) != 2
                     or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) for x in v)
                     or not 0 <= v[0] < v[1]):
-                raise bad("band", "[LO, HI] in Hz with 0 ≤ LO < HI")
+                raise bad("band", "[LO, HI] in Hz (band needs 0 ≤ LO < HI)")
             kw["band"] = (float(v[0]), float(v[1]))
         if "exp_end" in kw:
             if kw["exp_end"] is False or kw["exp_end"] is None:

@@ -14,6 +14,12 @@ from .main import cli
 from .options import FiniteRange, echo_json, json_option, overwrite_option
 
 
+def _read_by_ingest(path: Path) -> bool:
+    """Whether ingest reads a file of this name from a source folder (docs/ingest.md)."""
+    name = path.name.lower()
+    return path.suffix.lower() in (".uff", ".unv") or (name.startswith("point") and name.endswith(".csv"))
+
+
 @cli.command("ingest")
 @click.argument("sources", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
@@ -30,7 +36,8 @@ from .options import FiniteRange, echo_json, json_option, overwrite_option
 @json_option
 def ingest_cmd(sources, output, source_kind_opt, mapping, channel_opts, pressure, tire, overwrite, as_json):
     """Convert SOURCES (UFF 58 files/folders, or one CSV folder) into a measurement file."""
-    refuse_input_as_output({"--output": output}, {**{f"source {str(s)!r}": s for s in sources}, "--mapping": mapping})
+    refuse_input_as_output({"--output": output}, {**{"source": s for s in sources}, "--mapping": mapping},
+                           read_from_folder=_read_by_ingest)
     for s in sources:
         if not s.exists():
             raise ParameterError(f"source {str(s)!r}: no such file or folder")
