@@ -104,9 +104,13 @@ def test_run_killed_at_any_moment_leaves_old_new_or_nothing(measured, tmp_path):
     (out / "notes.txt").write_text("kept")
     (out / "report.html").write_text("stale view")
     before = inside.read_bytes()
-    res = run_cli(["run", inside, "-o", out, "--max-effects", "0", "--overwrite"])
+    # the help's own examples of --param (a traceback before: run.py built a dict of names)
+    res = run_cli(["run", inside, "-o", out, "--max-effects", "0", "--overwrite",
+                   "--param", "k_r1=6.7e6", "--param", "m_w=clamped"])
     assert res.exit_code == 0, res.output
     assert _state(out, old_manifest) == "new"
+    man = verify_manifest(out)
+    assert man["params"]["k_r1"] == 6.7e6 and man["params"]["m_w"] is None
     assert inside.read_bytes() == before and (out / "notes.txt").read_text() == "kept"
     assert not (out / "report.html").exists()
     assert "m.h5" in verify_manifest(out)["outputs"]
