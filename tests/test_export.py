@@ -96,3 +96,23 @@ def test_dead_channel_is_left_out_with_its_reason(table):
     shapes[:, list(table.channel_location).index("tread"), :] = np.nan
     with pytest.raises(DataFormatError, match="no tread channel"):
         shape_set(dataclasses.replace(table, shapes=shapes))
+
+
+def test_mode_gif_moves_and_stays_small(table):
+    import io
+
+    from PIL import Image
+
+    from tiremodal_cli.plots import mode_gif
+
+    s = shape_set(table)
+    k = int(np.argmax(table.mpc))
+    data = mode_gif(s, k, frames=8)
+    im = Image.open(io.BytesIO(data))
+    assert im.format == "GIF" and im.n_frames == 8 and im.size == (144, 144)
+    frames = []
+    for i in (0, 2):  # a quarter period apart: the rings have moved
+        im.seek(i)
+        frames.append(np.asarray(im.convert("L"), dtype=float))
+    assert np.mean(np.abs(frames[0] - frames[1])) > 0.5
+    assert len(data) < 150_000  # 34 modes stay well under a 10 MB report
