@@ -116,3 +116,23 @@ def test_mode_gif_moves_and_stays_small(table):
         frames.append(np.asarray(im.convert("L"), dtype=float))
     assert np.mean(np.abs(frames[0] - frames[1])) > 0.5
     assert len(data) < 150_000  # 34 modes stay well under a 10 MB report
+
+
+def test_export_command(table, tmp_path):
+    from conftest import run_cli
+
+    from tiremodal_cli.modalfile import write_modal
+
+    modal = tmp_path / "modal.h5"
+    write_modal(modal, table, input_file="x", input_sha256="0" * 64)
+    before = modal.read_bytes()
+    res = run_cli(["export", modal, "-o", tmp_path / "shapes", "--format", "csv", "--radius", "tread=0.6"])
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in (tmp_path / "shapes").iterdir()) == ["nodes.csv", "shapes.csv"]
+    assert "0.6," in (tmp_path / "shapes" / "nodes.csv").read_text().splitlines()[1]
+    res = run_cli(["export", modal, "-o", tmp_path / "shapes"])  # exists, no --overwrite
+    assert res.exit_code == 2 and "--overwrite" in res.output
+    res = run_cli(["export", tmp_path, "-o", tmp_path / "inside"])
+    assert res.exit_code == 2 and "inside the input" in res.output
+    assert not (tmp_path / "inside").exists() and modal.read_bytes() == before
+    assert not [p for p in tmp_path.iterdir() if ".partial." in p.name]

@@ -32,7 +32,10 @@ import numpy as np
 from .errors import DataFormatError
 
 __all__ = ["ShapeSet", "shape_set", "uff_datasets", "write_uff", "shapes_csv", "nodes_csv", "RING_BASE",
-           "DEFAULT_RADII_M"]
+           "DEFAULT_RADII_M", "FORMATS", "export_folder"]
+
+#: Export formats: "uff" — shapes.uff (UFF 15 + 82 + 55); "csv" — nodes.csv and shapes.csv.
+FORMATS = ("uff", "csv")
 
 #: First node number of each ring.
 RING_BASE = {"tread": 1000, "sidewall": 2000, "rim": 3000}
@@ -194,3 +197,64 @@ def shapes_csv(s: ShapeSet) -> str:
             w.writerow([k + 1, f"{s.frequency_hz[k]:.9g}", f"{s.damping_ratio[k]:.6g}", s.label[k],
                         int(s.node[i]), s.ring[i], f"{v.real:.9g}", f"{v.imag:.9g}"])
     return buf.getvalue()
+
+
+def export_folder(table, outdir, *, fmt: str = "uff", radii_m: dict | None = None, gif: bool = False,
+                  name: str = "tiremodal", overwrite: bool = False, progress=None) -> dict:
+    """Write a modal table's shapes into the folder ``outdir``, whole or not at all.
+
+    The files are written into a private folder beside ``outdir`` and renamed into place
+    when complete (an existing ``outdir`` is replaced only with ``overwrite``).
+
+    Parameters
+    ----------
+    table : ModalTable
+    outdir : path of the folder to create
+    fmt : {"uff", "csv"}
+    radii_m : ring radii (m), optional
+    gif : also ``modes/mode_NN.gif``, each mode moving (:func:`tiremodal_cli.plots.mode_gif`)
+    progress : callable(done, total), optional
+
+    Returns
+    -------
+    dict : the files written (relative to ``outdir``), the modes, and what was left out.
+    """
+    import shutil
+    import tempfile
+    from pathlib import Path
+
+    from .errors import ParameterError
+    from .files import check_overwrite, install_dir
+
+    if fmt not in FORMATS:
+        raise ParameterError(f"format={fmt!r}; allowed: {', '.join(FORMATS)}")
+    outdir = Path(outdir)
+    check_overwrite(outdir, overwrite)
+    s = shape_set(table, radii_m=radii_m)
+    outdir.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{outdir.name}.partial.", dir=outdir.parent))
+    files = []
+    try:
+        if fmt == "uff":
+            write_uff(tmp / "shapes.uff", s, name=name)
+            files.append("shapes.uff")
+        else:
+            (tmp / "nodes.csv").write_text(nodes_csv(s), encoding="utf-8")
+            (tmp / "shapes.csv").write_text(shapes_csv(s), encoding="utf-8")
+            files += ["nodes.csv", "shapes.csv"]
+        if gif:
+            from .plots import mode_gif
+
+            (tmp / "modes").mkdir()
+            for k in range(s.frequency_hz.size):
+                rel = f"modes/mode_{k + 1:02d}.gif"
+                (tmp / rel).write_bytes(mode_gif(s, k))
+                files.append(rel)
+                if progress:
+                    progress(k + 1, s.frequency_hz.size)
+        install_dir(tmp, outdir)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return {"output": str(outdir), "format": fmt, "files": files, "modes": int(s.frequency_hz.size),
+            "nodes": int(s.node.size), "rings": list(dict.fromkeys(s.ring)), "left_out": list(s.left_out)}
