@@ -51,6 +51,8 @@ class RunOptions:
     pressure_from_file : the model's inflation pressure P0 is the one the measurement
         records (when it records one), not the nominal parameters' — a campaign over
         pressures is then fitted at each test's own pressure
+    form : FRF form the modal stage works on: "accelerance" (what accelerometers give),
+        "mobility" or "receptance" — the modes should not depend on it
     """
 
     frf_top: float = 0.3125
@@ -61,6 +63,7 @@ class RunOptions:
     max_effects: int = 2
     predict_n: int = 12
     pressure_from_file: bool = True
+    form: str = "accelerance"
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -100,6 +103,8 @@ class RunOptions:
             kw["frf_top"] = number("frf_top", lambda x: 0 < x <= 0.5, "a fraction of the sample rate in (0, 0.5]")
         if "noise_floor_pct" in kw:
             kw["noise_floor_pct"] = number("noise_floor_pct", lambda x: 0 < x <= 100, "a percentage in (0, 100]")
+        if "form" in kw and kw["form"] not in ("accelerance", "mobility", "receptance"):
+            raise bad("form", "accelerance, mobility, receptance")
         if "pressure_from_file" in kw and not isinstance(kw["pressure_from_file"], bool):
             raise bad("pressure_from_file", "true or false")
         for k, lo, hi in (("seed", None, None), ("max_effects", 0, 5), ("predict_n", 1, 100)):
@@ -143,7 +148,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
             raise ParameterError(f"band {opt.band[0]:g} … {opt.band[1]:g} Hz: allowed: HI ≤ {opt.frf_top * fs:g} Hz "
                                  f"(the FRFs' top, {opt.frf_top:g} × the sample rate; Nyquist {fs / 2:g} Hz)")
         try:
-            r = compute_frf(m, FRFOptions(band_hz=(0.0, opt.frf_top * fs), exp_end=opt.exp_end))
+            r = compute_frf(m, FRFOptions(band_hz=(0.0, opt.frf_top * fs), exp_end=opt.exp_end, form=opt.form))
         except OSError as exc:
             raise DataFormatError(f"{measurement}: cannot read the records ({exc}); the file may be truncated") from None
         meta = {"tire": getattr(m, "tire", None), "inflation_pressure": getattr(m, "inflation_pressure", None),
