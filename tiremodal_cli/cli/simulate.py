@@ -89,10 +89,20 @@ def estimate_bytes(cfg: SimulationConfig) -> float:
     the frequency lines, and the records (force and responses, float64, with the noise and
     type-conversion copies: ×3).
     """
-    n_modes = 6.0 * (cfg.n_max + 1)
     n_f = cfg.n_samples // 2 + 1
     n_c = len(cfg.channels)
-    shapes = 12.0 * n_modes**2  # the shapes and the eigensolver's workspace (measured: n_max 1000 → 0.38 GiB)
+    if getattr(cfg, "model", "paper") == "ring":
+        # the ring's mesh (refined for every order below 1.25 × Nyquist), ≤ 5 fields on 2 nodes
+        # per element; its condensed dense matrices and eigensolver workspace: 3 of n_dof²
+        from ..ring import elements_for
+
+        ne = max(cfg.ring.n_elements, elements_for(cfg.ring, 0.625 * cfg.sample_rate))
+        n_dof = 10.0 * ne
+        n_modes = n_dof
+        shapes = 24.0 * n_dof**2
+    else:
+        n_modes = 6.0 * (cfg.n_max + 1)
+        shapes = 12.0 * n_modes**2  # the shapes and the eigensolver's workspace (measured: n_max 1000 → 0.38 GiB)
     frfs = 16.0 * n_f * (n_c * cfg.n_points + n_modes)
     records = 3 * 8.0 * cfg.n_points * cfg.n_hits * (n_c + 1) * cfg.n_samples
     return shapes + frfs + records
