@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import DataFormatError, ParameterError
-from .hits import _clip_count, bounce_in_pulse, double_hit, pulse_extent
+from .hits import _clip_count, bounce_from_segments, double_hit, pulse_extent, pulse_segments
 from .windows import exponential_window, force_window
 
 log = logging.getLogger(__name__)
@@ -294,7 +294,7 @@ def _time_checks(f, y, fs, opt, names, ip):
 
 def _test_wide_checks(m, fs, opt):
     """Checks over every hit of the test: a bounce within the pulse (:func:`bounce_in_pulse`
-    on all force records at once; the force alone, so memory is the force records').
+    over all the force records; read a point at a time, kept as 25 ms segments).
 
     Returns {point: [(hit, notch_hz), ...]} and the checks that could not run, each said once
     (a warning, and ``meta["checks_not_run"]``): the bounce check with fewer than 5 usable
@@ -304,8 +304,9 @@ def _test_wide_checks(m, fs, opt):
     if not opt.check_hits:
         return out, not_run
     n_p, n_h = m.n_points, m.n_hits
-    flags, notch, ran = bounce_in_pulse(np.asarray(m.force, dtype=float).reshape(n_p * n_h, -1), fs,
-                                        min_relative=opt.double_hit_relative)
+    parts = [pulse_segments(np.asarray(m.force[ip], dtype=float), fs) for ip in range(n_p)]  # one point at a time
+    seg, noise, ok = (np.concatenate([p[k] for p in parts]) for k in range(3))
+    flags, notch, ran = bounce_from_segments(seg, noise, ok, fs, min_relative=opt.double_hit_relative)
     if not ran:
         not_run.append(f"double hits within the pulse (force spectrum): needs at least 5 usable hits in the test, "
                        f"it has {n_p * n_h}")

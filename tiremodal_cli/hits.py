@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["clipped_samples", "is_clipped", "double_hit", "pulse_extent"]
+__all__ = ["clipped_samples", "is_clipped", "double_hit", "pulse_extent", "bounce_in_pulse", "pulse_segments",
+           "bounce_from_segments"]
 
 
 def clipped_samples(x, *, axis=-1, min_run: int = 2, min_count: int = 3, rtol: float = 1e-6) -> np.ndarray:
@@ -151,21 +152,23 @@ def bounce_in_pulse(force, fs: float, *, min_relative: float = 0.2, band_top: fl
     notch_hz : (n_records,) float   frequency of each record's deepest dip (NaN: none)
     ran : bool   False when the test has too few usable hits (nothing flagged then)
     """
-    from scipy.special import ndtri
+    seg, noise, ok = pulse_segments(force, fs)
+    return bounce_from_segments(seg, noise, ok, fs, min_relative=min_relative, band_top=band_top,
+                                false_alarm=false_alarm, min_hits=min_hits)
 
+
+def pulse_segments(force, fs: float):
+    """Each record's blow: 5 ms before its peak to 20 ms after (a blow and a bounce of
+    ≤ 20 ms), and the robust std of the force noise away from it.
+
+    Returns seg (n_records, L), noise (n_records,), ok (n_records,) — ok False for a
+    non-finite or all-zero record.
+    """
     f = np.asarray(force, dtype=float)
     n, ns = f.shape
-    flags = np.zeros(n, dtype=bool)
-    notch = np.full(n, np.nan)
-    ok = np.isfinite(f).all(axis=1) & (np.abs(f).max(axis=1) > 0)
-    if ok.sum() < min_hits:
-        return flags, notch, False
-    band_top = 0.3125 * fs if band_top is None else band_top
-    pre, post = int(np.ceil(0.005 * fs)), int(np.ceil(0.02 * fs))  # a blow and a bounce of ≤ 20 ms
+    ok = np.isfinite(f).all(axis=1) & (np.abs(np.where(np.isfinite(f), f, 0)).max(axis=1) > 0)
+    pre, post = int(np.ceil(0.005 * fs)), int(np.ceil(0.02 * fs))
     L = pre + post
-    nfft = 1 << int(np.ceil(np.log2(8 * L)))
-    freq = np.fft.rfftfreq(nfft, 1 / fs)
-    sel = freq <= band_top
     ipk = np.argmax(np.abs(np.where(np.isfinite(f), f, 0)), axis=1)
     seg = np.zeros((n, L))
     noise = np.zeros(n)
@@ -177,6 +180,24 @@ def bounce_in_pulse(force, fs: float, *, min_relative: float = 0.2, band_top: fl
         seg[i, inside] = f[i, take[inside]]
         away = f[i, (idx < lo) | (idx >= lo + L)]
         noise[i] = 1.4826 * np.median(np.abs(away - np.median(away))) if away.size else 0.0
+    return seg, noise, ok
+
+
+def bounce_from_segments(seg, noise, ok, fs: float, *, min_relative: float = 0.2, band_top: float | None = None,
+                         false_alarm: float = 1e-3, min_hits: int = 5):
+    """:func:`bounce_in_pulse` from :func:`pulse_segments` (gathered point by point by a
+    caller that reads the records lazily). Same returns."""
+    from scipy.special import ndtri
+
+    n, L = seg.shape
+    flags = np.zeros(n, dtype=bool)
+    notch = np.full(n, np.nan)
+    if ok.sum() < min_hits:
+        return flags, notch, False
+    band_top = 0.3125 * fs if band_top is None else band_top
+    nfft = 1 << int(np.ceil(np.log2(8 * L)))
+    freq = np.fft.rfftfreq(nfft, 1 / fs)
+    sel = freq <= band_top
     S = np.abs(np.fft.rfft(seg, n=nfft, axis=1))[:, sel]
     level = S[:, 0:1].copy()
     level[level <= 0] = np.nan

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import click
 
-from ..errors import DataFormatError, ParameterError
+from ..errors import DataFormatError
+from ..files import refuse_input_as_output
 from ..export import DEFAULT_RADII_M, FORMATS, export_folder
 from ..modalfile import read_modal
 from .main import cli
@@ -54,8 +55,7 @@ def export_cmd(source, output, fmt, radii, gif, overwrite, as_json):
         if not 0 < radii_m[k] < 10:
             raise click.BadParameter(f"{k}={v} m; allowed: 0 < radius < 10 m", param_hint="--radius")
     src = _modal_path(source)
-    if output.resolve() == source.resolve() or source.resolve() in output.resolve().parents:
-        raise ParameterError(f"--output {output} is inside the input {source}; choose another folder")
+    refuse_input_as_output({"--output": output}, {"SOURCE": source})
     table = read_modal(src)
     bar = Progress("export") if gif else None
     try:
