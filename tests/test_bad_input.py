@@ -67,12 +67,13 @@ def fx(tmp_path_factory):
         shutil.copy(m, d / name)
         with h5py.File(d / name, "r+") as h:
             h.attrs["inflation_pressure"] = value
-    shutil.copy(m, d / "short.h5")
-    with h5py.File(d / "short.h5", "r+") as h:
-        for k in ("force", "response"):
-            data = h[k][..., :2]
-            del h[k]
-            h.create_dataset(k, data=data)
+    for name, n in (("short.h5", 2), ("s64.h5", 64)):
+        shutil.copy(m, d / name)
+        with h5py.File(d / name, "r+") as h:
+            for k in ("force", "response"):
+                data = h[k][..., :n]
+                del h[k]
+                h.create_dataset(k, data=data)
     (d / "c_type.toml").write_text('n_points = "many"\n')
     (d / "c_float.toml").write_text("n_hits = 2.5\n")
     (d / "c_bool.toml").write_text("sample_rate = true\n")
@@ -158,6 +159,7 @@ CASES = [
     ("info-missing", ["info", "{out}"], ["out"]),
     ("frf-plot-ext", ["frf", "{m.h5}", "-o", "{out}", "--plot", "{out2}.xyz"], ["--plot", "xyz", "png"]),
     ("frf-exp-tau", ["frf", "{m.h5}", "-o", "{out}", "--exp-tau", "1e-9"], ["--exp-tau", "1e-09"]),
+    ("frf-exp-end-tiny", ["frf", "{s64.h5}", "-o", "{out}", "--exp-end", "1e-50"], ["--exp-end", "allowed", "2.19e-44"]),
     ("frf-fwl-huge", ["frf", "{m.h5}", "-o", "{out}", "--force-window-length", "1e9"],
      ["--force-window-length", "1e+09", "record"]),
     ("frf-fwl-neg", ["frf", "{m.h5}", "-o", "{out}", "--force-window-length", "-1"], ["--force-window-length"]),

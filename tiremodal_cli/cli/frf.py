@@ -16,7 +16,7 @@ from .main import cli
 from .options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option
 
 
-def _check_windows(m, force_window_s, exp_tau_s) -> None:
+def _check_windows(m, force_window_s, exp_tau_s, exp_end=None) -> None:
     """Window lengths against the record: the force window's flat part must be shorter than
     the record; the exponential window's time constant τ at least 2/(π fs) — it widens every
     line by 1/(π τ) Hz (its Lorentzian's half-power bandwidth), which must stay below the
@@ -26,6 +26,10 @@ def _check_windows(m, force_window_s, exp_tau_s) -> None:
         raise click.BadParameter(f"{force_window_s:g} s is not shorter than the record ({T:g} s); "
                                  f"allowed: 0 < SECONDS < {T:g}", param_hint="--force-window-length")
     tau_min = 2.0 / (np.pi * fs)
+    if exp_end is not None and T / -np.log(exp_end) < tau_min:
+        raise click.BadParameter(f"{exp_end:g} at the record's end is a time constant of {T / -np.log(exp_end):.3g} s, "
+                                 f"widening every line beyond the Nyquist frequency ({fs / 2:g} Hz); allowed: ≥ "
+                                 f"{np.exp(-T / tau_min):.3g} (τ ≥ 2/(π fs) = {tau_min:.3g} s)", param_hint="--exp-end")
     if exp_tau_s is not None and exp_tau_s < tau_min:
         raise click.BadParameter(f"{exp_tau_s:g} s widens every line by {1 / (np.pi * exp_tau_s):.3g} Hz, beyond "
                                  f"the Nyquist frequency ({fs / 2:g} Hz); allowed: ≥ 2/(π fs) = {tau_min:.3g} s",
@@ -78,7 +82,7 @@ def frf_cmd(measurement, output, estimator, form, band, force_window, force_wind
     sha = sha256_file(measurement) if measurement.is_file() else ""
     bar = Progress("frf")
     with open_measurement(measurement) as m:
-        _check_windows(m, force_window_length, exp_tau)
+        _check_windows(m, force_window_length, exp_tau, exp_end)
         bad = [p + 1 for p in pts if not 0 <= p < m.n_points]
         if plot_out and bad:
             raise click.BadParameter(f"point {bad[0]} is not in 1…{m.n_points}", param_hint="--plot-points")
