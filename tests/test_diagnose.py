@@ -143,8 +143,10 @@ def test_diagnose_bad_input_is_one_line(tmp_path):
     bad.write_text("frequency_hz,damping_ratio\n55.0,0.02\n")
     res = run_cli(["diagnose", bad])
     assert res.exit_code == 2
+    # one line naming the file and the cause (issue #16: the old line named neither)
     assert res.stderr.strip().splitlines() == [
-        "Error: no usable modes: a diagnosis needs modes with n and branch (same/opposite)"]
+        f"Error: {bad}: no usable modes among 1 row(s) (no n or branch (1×)); allowed: rows with frequency_hz > 0, "
+        "an integer n ≥ 0 and branch same/opposite (run lsce with --spatial on for tyre FRFs)"]
     res = run_cli(["diagnose", TABLE_A1, "--candidates", "gravity"])
     assert res.exit_code == 2 and "unknown candidate 'gravity'" in res.stderr
 
