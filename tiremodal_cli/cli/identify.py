@@ -33,7 +33,8 @@ def fit_options(free, bounds, weights, seed, paper_ga, population, generations):
         except ValueError:
             raise click.BadParameter(f"{item!r} must be NAME=LO:HI", param_hint="--bounds") from None
         if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
-            raise click.BadParameter(f"{item!r}: allowed: finite 0 < LO < HI (SI units)", param_hint="--bounds")
+            raise click.BadParameter(f"{item!r}: bounds must be positive and finite with LO < HI (SI units)",
+                                     param_hint="--bounds")
         b[name.strip()] = (lo, hi)
     kw = dict(free=tuple(x.strip() for x in free.split(",") if x.strip()), bounds=b, weights=weights, seed=seed)
     if paper_ga:
