@@ -261,3 +261,55 @@ def test_added_mass_split_pairs_resolved_by_poly_reference():
             assert {int(table.n[k]) for k in found} == {n} and {table.branch[k] for k in found} == {br}, (n, br)
             assert table.pair[found[0]] == table.pair[found[1]] >= 0
             assert table.splitting_hz[found[0]] == pytest.approx(members[1] - members[0], rel=0.05)
+
+
+def _permuted(r, idx):
+    import dataclasses
+    return dataclasses.replace(r, H=r.H[:, idx], coherence=r.coherence[:, idx], n_averages=r.n_averages[idx],
+                               point_index=r.point_index[idx], point_angle=r.point_angle[idx])
+
+
+def test_modes_do_not_depend_on_how_points_are_stored():
+    """A test rolled by ten points, and one stored in decreasing angle, give the same modes
+    (frequency, n, branch) as the original: the tread is recognised from any origin."""
+    s = simulate(SimulationConfig(n_points=34, n_hits=3, sample_rate=1024.0, n_samples=4096, noise=0.005, seed=2,
+                                  params=TyreParameters(m_w=1000.0)))
+    r = compute_frf(s.measurement)
+    tables = [modal_table_from_frf(_permuted(r, idx), ModalOptions(band_hz=(40, 150)))[0]
+              for idx in (np.arange(34), np.roll(np.arange(34), -10), np.arange(34)[::-1])]
+    ref = tables[0]
+    assert ref.meta["spatial"] and ref.n.size >= 8
+    for t in tables[1:]:
+        assert t.meta["spatial"]
+        assert_allclose(t.frequency_hz, ref.frequency_hz, rtol=1e-6)
+        assert list(t.n) == list(ref.n) and list(t.branch) == list(ref.branch)
+
+
+def test_coherence_threshold_is_the_noise_quantile():
+    """Pure noise through H1 with n_d averages: the threshold is exceeded by 1 % of lines."""
+    from tiremodal_cli.frf import estimate
+    from tiremodal_cli.modes import coherence_threshold
+    rng = np.random.default_rng(0)
+    for n_d in (2, 3, 5):
+        F = rng.standard_normal((n_d, 20000)) + 1j * rng.standard_normal((n_d, 20000))
+        Y = rng.standard_normal((n_d, 20000)) + 1j * rng.standard_normal((n_d, 20000))
+        _, coh = estimate(F, Y)
+        rate = np.mean(coh >= coherence_threshold(n_d))
+        assert 0.008 < rate < 0.012, (n_d, rate)
+
+
+@pytest.mark.parametrize("fs", [1024.0, 5120.0])
+def test_default_band_follows_the_data_not_the_sample_rate(fs):
+    """The default band holds the n = 1 and n = 2 modes at any sample rate (the old
+    0.04 fs start lost them at 2,048 Hz and above), and stops where the coherence fails
+    (the hammer's spectrum falls towards its first zero at 1.5 / pulse width)."""
+    from tiremodal_cli.modes import default_band
+    s = simulate(SimulationConfig(n_points=34, n_hits=3, sample_rate=fs, n_samples=4096, noise=0.02, seed=1,
+                                  params=TyreParameters(m_w=1000.0)))
+    r = compute_frf(s.measurement, FRFOptions(band_hz=(0.0, 0.3125 * fs), exp_end=0.05))
+    (lo, hi), why = default_band(r.freq_hz, r.coherence, r.n_averages)
+    low = [m for m in s.truth["modes"] if m["n"] in (1, 2) and m["branch"] == "same"]
+    assert all(lo < m["frequency_hz"] * (1 - 2 * m["damping_ratio"]) for m in low), (lo, low)
+    assert lo > 0 and "coherence" in why
+    assert hi < 1.5 / s.truth["config"]["pulse_width_s"]
+    assert hi > 300.0  # the band is not cut short below the opposite n ≈ 12 modes

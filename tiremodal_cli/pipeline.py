@@ -15,6 +15,8 @@ import time
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
+import numpy as np
+
 from . import __version__
 from .diagnose import DiagnoseOptions, diagnose, report
 from .errors import DataFormatError, ParameterError
@@ -39,8 +41,8 @@ class RunOptions:
     """Defaults of every stage (fractions of the sample rate fs where marked).
 
     frf_top : FRFs up to frf_top × fs (0.3125: inside a front end's anti-alias corner at 0.4 fs)
-    band : lsce band (Hz); default (0.04 fs, 0.293 fs): above the rim and rigid-body region,
-        below the FRF band's top
+    band : lsce band (Hz); default: where the coherence and the force spectrum support the
+        estimate (:func:`tiremodal_cli.modes.default_band`, its reason in the modal file)
     exp_end : exponential window's value at the record's end (its damping is corrected)
     predict_n : predictions (and sensitivities) reach at least this order, and always two
         beyond the highest measured one
@@ -138,6 +140,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
             r = compute_frf(m, FRFOptions(band_hz=(0.0, opt.frf_top * fs), exp_end=opt.exp_end))
         except OSError as exc:
             raise DataFormatError(f"{measurement}: cannot read the records ({exc}); the file may be truncated") from None
+        force_g = _force_autospectrum(m, r.freq_hz)
         meta = {"tire": getattr(m, "tire", None), "inflation_pressure": getattr(m, "inflation_pressure", None),
                 "n_points": int(m.n_points), "n_hits": int(m.n_hits), "sample_rate": fs}
     nominal = params
@@ -147,8 +150,8 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     source = source or {"path": str(measurement), "kind": "measurement", "sha256": sha}
     write_frf(outdir / "frf.h5", r, input_file=str(source["path"]), input_sha256=sha, overwrite=True)
     say("lsce")
-    band = opt.band or (0.04 * fs, 0.293 * fs)
-    table, _ = modal_table_from_frf(r, ModalOptions(band_hz=tuple(band)))
+    table, _ = modal_table_from_frf(r, ModalOptions(band_hz=None if opt.band is None else tuple(opt.band)),
+                                    force_autospectrum=force_g)
     write_modal(outdir / "modal.h5", table, input_file="frf.h5",
                 input_sha256=sha256_file(outdir / "frf.h5"), overwrite=True)
     write_text_atomic(outdir / "modes.csv", to_csv(table), overwrite=True)
@@ -184,6 +187,19 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
                 "outputs": {name: sha256_file(outdir / name) for name in names}, "summary": summary}
     write_text_atomic(outdir / MANIFEST, _json(manifest), overwrite=True)
     return summary
+
+
+def _force_autospectrum(m, freq_hz):
+    """Mean |F|² of every hit's force record on the FRF lines ``freq_hz`` (one point at a
+    time: memory of one point's records)."""
+    fs, ns = float(m.sample_rate), int(m.n_samples)
+    k = np.round(np.asarray(freq_hz) * ns / fs).astype(int)
+    acc = np.zeros(k.size)
+    for ip in range(m.n_points):
+        f = np.asarray(m.force[ip], dtype=float)
+        f = np.where(np.isfinite(f), f, 0.0)
+        acc += np.sum(np.abs(np.fft.rfft(f, axis=-1)[..., k]) ** 2, axis=0)
+    return acc
 
 
 def _sensitivity(res, n_max: int) -> dict:

@@ -29,7 +29,7 @@ def read_any_frf(path: Path, mapping=None):
 @click.argument("frf_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="Modal file to write (HDF5).")
-@click.option("--band", nargs=2, type=float, metavar="LO HI", help="Analysis band, Hz (default: all lines > 0 Hz).")
+@click.option("--band", nargs=2, type=float, metavar="LO HI", help="Analysis band, Hz (default: where the coherence supports the estimate).")
 @click.option("--max-order", type=click.IntRange(2, 400), default=120, show_default=True,
               help="Highest model order of the sweep (per circumferential order: at most 24).")
 @click.option("--spatial", type=click.Choice(["auto", "on", "off"]), default="auto", show_default=True,
@@ -75,7 +75,8 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, 
     rows = to_rows(table)
     if as_json:
         echo_json({"modes": rows, "clusters": table.clusters, "rejected_modes": table.rejected,
-                   "band_hz": table.meta["band_hz"], "spatial": table.meta["spatial"],
+                   "band_hz": table.meta["band_hz"], "band_reason": table.meta.get("band_reason"),
+                   "spatial": table.meta["spatial"],
                    "exp_tau_s": table.meta["exp_tau_s"],
                    "fit_error_median": float(np.nanmedian(table.fit_error)), "output": str(output)})
     else:

@@ -17,7 +17,7 @@ from .options import echo_json, json_option, load_params, params_options
 @click.option("-o", "--output", "outdir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Folder for every stage's output.")
 @params_options
-@click.option("--band", nargs=2, type=float, metavar="LO HI", help="lsce band, Hz (default 0.04 fs … 0.293 fs).")
+@click.option("--band", nargs=2, type=float, metavar="LO HI", help="lsce band, Hz (default: from the coherence and force spectrum).")
 @click.option("--exp-end", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.05,
               show_default=True, help="Exponential window's value at the record's end (corrected in lsce).")
 @click.option("--no-exp-window", is_flag=True, help="No exponential window.")
