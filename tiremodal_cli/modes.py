@@ -317,29 +317,73 @@ def _fit_group(freq, rows, back, H_phys, s, form, opt, g):
     almost nothing is dropped however large its share of that group.
     """
     rejected = []
-    for _ in range(40):
+    for _ in range(s.size + 1):  # each pass drops one mode or returns
         if s.size == 0:
             return None, s, rejected
         fit = lsfd(freq, rows, s, form=form)
         sig = np.array([significance(freq, H_phys, back @ fit.residues[:, [k]], s[[k]], form=form)[0]
                         for k in range(s.size)])
-        weak = np.flatnonzero(sig < opt.min_significance)
-        if weak.size == 0:
+        r, why = _weakest(freq, rows, fit.synthesis, s, sig, form, opt,
+                          lambda keep: lsfd(freq, rows, s[keep], form=form).synthesis)
+        if r is None:
             return _GroupFit(fit.residues, fit.synthesis, sig), s, rejected
-        r = weak[np.argmin(sig[weak])]  # one at a time: the others may gain once it is gone
         f_r, z_r = poles_to_modal(s[r])
-        rejected.append({"frequency_hz": float(f_r), "damping_ratio": float(z_r), "group": int(g),
-                         "reason": f"insignificant: explains {100 * sig[r]:.1f} % of the response "
-                                   "at its frequency"})
+        rejected.append({"frequency_hz": float(f_r), "damping_ratio": float(z_r), "group": int(g), "reason": why})
         s = np.delete(s, r)
     return _GroupFit(fit.residues, fit.synthesis, sig), s, rejected
+
+
+#: probability that the noise alone in a mode's half-power band carries the energy the
+#: mode explains there (per candidate mode)
+NOISE_ALPHA = 1e-3
+
+
+def _above_noise(freq, rows, synthesis, s, refit, form, alpha=NOISE_ALPHA):
+    """Which modes the data support: the extra sum of squares of each mode against the noise.
+
+    The noise variance σ² of each row is the median of |rows − synthesis|² over the band
+    divided by ln 2 (the median of a complex Gaussian's power). For each mode r the fit is
+    redone without it (``refit(keep)``: the same estimator, the other poles, fresh residues
+    and residual terms); the increase of the residual, ΔE_r = Σ_rows (‖res_without‖² −
+    ‖res_with‖²) / σ²_row, is for a pole fitted to noise at most χ²(2 n_rows + 2)/2 (a
+    complex residue per row, and the pole's frequency and damping), searched over the
+    band's K lines: the mode is supported when ΔE_r exceeds the 1 − alpha/K quantile
+    (Bonferroni over the lines where a noise pole could sit). Returns (mask, ΔE_r / threshold).
+    """
+    from scipy.stats import chi2
+
+    res = rows - synthesis
+    var = np.median(res.real**2 + res.imag**2, axis=1) / np.log(2)
+    var = np.maximum(var, np.finfo(float).tiny)
+    base = float(np.sum(np.sum(res.real**2 + res.imag**2, axis=1) / var))
+    thr = chi2.ppf(1 - alpha / freq.size, 2 * rows.shape[0] + 2) / 2
+    ratio = np.zeros(len(s))
+    for r in range(len(s)):
+        keep = np.delete(np.arange(len(s)), r)
+        e = refit(keep) if keep.size else _residual_terms_only(freq, rows, form)
+        d = rows - e
+        ratio[r] = (float(np.sum(np.sum(d.real**2 + d.imag**2, axis=1) / var)) - base) / thr
+    return ratio >= 1, ratio
+
+
+def _residual_terms_only(freq, rows, form):
+    """Least-squares fit of the lower and upper residual terms alone (no mode)."""
+    from .lsfd import FORM_POWER
+
+    q = FORM_POWER[form]
+    jw = 2j * np.pi * np.asarray(freq, dtype=float)[:, None]
+    A = np.concatenate([jw ** (q - 2), jw**q], axis=1)
+    Ar = np.concatenate([A.real, A.imag], axis=0)
+    Y = np.concatenate([rows.real, rows.imag], axis=1).T
+    x = np.linalg.lstsq(Ar, Y, rcond=None)[0]
+    return (A @ x).T
 
 
 def _fit_group_poly(freq, rows, n_h, n_c, back, H_phys, s, L, form, opt, g):
     """:func:`_fit_group` for a poly-reference group: residues ψ_c L_h (cos/sin as references)."""
     rejected = []
     Y = rows.reshape(n_h, n_c, -1).transpose(1, 0, 2)  # (channel, harmonic, K)
-    for _ in range(40):
+    for _ in range(s.size + 1):  # each pass drops one mode or returns
         if s.size == 0:
             return None, s, rejected
         res3, syn3 = lsfd_participation(freq, Y, s, L, form=form)
@@ -347,15 +391,30 @@ def _fit_group_poly(freq, rows, n_h, n_c, back, H_phys, s, L, form, opt, g):
         synthesis = syn3.transpose(1, 0, 2).reshape(n_h * n_c, -1)
         sig = np.array([significance(freq, H_phys, back @ residues[:, [k]], s[[k]], form=form)[0]
                         for k in range(s.size)])
-        weak = np.flatnonzero(sig < opt.min_significance)
-        if weak.size == 0:
+        r, why = _weakest(freq, rows, synthesis, s, sig, form, opt,
+                          lambda keep: lsfd_participation(freq, Y, s[keep], L[keep], form=form)[1]
+                          .transpose(1, 0, 2).reshape(n_h * n_c, -1))
+        if r is None:
             return _GroupFit(residues, synthesis, sig), s, rejected
-        r = weak[np.argmin(sig[weak])]
         f_r, z_r = poles_to_modal(s[r])
-        rejected.append({"frequency_hz": float(f_r), "damping_ratio": float(z_r), "group": int(g),
-                         "reason": f"insignificant: explains {100 * sig[r]:.1f} % of the response at its frequency"})
+        rejected.append({"frequency_hz": float(f_r), "damping_ratio": float(z_r), "group": int(g), "reason": why})
         s, L = np.delete(s, r), np.delete(L, r, axis=0)
     return _GroupFit(residues, synthesis, sig), s, rejected
+
+
+def _weakest(freq, rows, synthesis, s, sig, form, opt, refit):
+    """The one mode to drop next (one at a time: the others may gain once it is gone), and
+    why; (None, "") when every mode is significant and above the noise."""
+    weak = np.flatnonzero(sig < opt.min_significance)
+    if weak.size:
+        r = weak[np.argmin(sig[weak])]
+        return r, f"insignificant: explains {100 * sig[r]:.1f} % of the response at its frequency"
+    above, ratio = _above_noise(freq, rows, synthesis, s, refit, form)
+    if not above.all():
+        r = int(np.argmin(ratio))
+        return r, (f"not supported by the data: explains {ratio[r]:.2f} × what the noise in its half-power band "
+                   f"exceeds with probability {NOISE_ALPHA:g}")
+    return None, ""
 
 
 def _off_edges(modes, f_lo, f_hi, exp_tau_s):
