@@ -16,7 +16,7 @@ from threadpoolctl import threadpool_limits
 
 from .errors import DataFormatError, ParameterError
 from .lsce import poles_to_modal, principal_responses, sweep, sweep_poly
-from .lsfd import lsfd, lsfd_participation, mpc, significance
+from .lsfd import FORM_POWER, lsfd, lsfd_participation, mpc, significance
 from .spatial import decompose
 from .stabilization import StabilizationOptions, stabilize
 from .windows import correct_poles
@@ -235,7 +235,17 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     sel = principal_responses(freq_hz, H[live].reshape(-1, freq_hz.size), band, rtol=opt.rtol_svd)
     lines = (freq_hz >= sel.freq_hz[0] - 1e-9) & (freq_hz <= sel.freq_hz[-1] + 1e-9)
     k_lines = freq_hz[lines]
-    Hb = H[live][:, :, lines]
+    # one internal form: accelerance. The estimate then weighs the lines alike whatever
+    # form the FRFs come in (receptance's 1/ω² would let the low lines dominate and turn
+    # the high band's noise into stable poles); the residues mean the same in every form
+    # (the LSFD basis carries (iω)^q), and the synthesis goes back to the given form.
+    if form not in FORM_POWER:
+        raise ParameterError(f"form={form!r}; allowed: {', '.join(FORM_POWER)}")
+    if FORM_POWER[form] != 2 and k_lines[0] <= 0:
+        raise ParameterError(f"the band of {form} FRFs must start above 0 Hz (got {k_lines[0]:g} Hz)")
+    to_acc = (2j * np.pi * k_lines) ** (2 - FORM_POWER[form])
+    form = "accelerance"
+    Hb = H[live][:, :, lines] * to_acc
     n_live, n_p = Hb.shape[:2]
     spatial = opt.spatial == "on" or (opt.spatial == "auto" and point_angle is not None
                                       and is_circumferential(point_angle, channel_location))
@@ -287,6 +297,7 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     shapes = np.full((s.size, H.shape[0], n_p), np.nan + 0j)
     shapes[:, live] = np.array([m[2] for m in modes]).reshape(s.size, n_live, n_p)
     err = np.full((H.shape[0], n_p), np.nan)
+    Hflat, synth = Hflat / to_acc, synth / to_acc  # back to the given form
     err[live] = (np.linalg.norm(Hflat - synth, axis=1) /
                  np.maximum(np.linalg.norm(Hflat, axis=1), np.finfo(float).tiny)).reshape(n_live, n_p)
     syn = np.full((H.shape[0], n_p, lines.sum()), np.nan + 0j)
@@ -366,6 +377,33 @@ def _above_noise(freq, rows, synthesis, s, refit, form, alpha=NOISE_ALPHA):
     return ratio >= 1, ratio
 
 
+def _has_peak(freq, rows, s):
+    """Whether the data show each mode: a peak or a phase turn in its half-power band.
+
+    Within f_r ± max(ζ_r f_r, one line), some row (or the rows' summed power) has a local
+    maximum (a line above both neighbours), or the phase of some row turns by ≥ π/4 (a
+    mode alone turns it by π/2 between its half-power points; half of that allows for a
+    neighbour or a residual that dilutes it). A pole on the smooth flank of another mode's
+    peak, fitted to the model's misfit, has neither (the real beam's 55 and 480 Hz
+    candidates); a heavily damped mode beside a stronger one shows at least the turn.
+    """
+    P = rows.real**2 + rows.imag**2
+    P = np.vstack([P, P.sum(axis=0)])
+    loc = np.zeros(freq.size, dtype=bool)
+    loc[1:-1] = np.any((P[:, 1:-1] > P[:, :-2]) & (P[:, 1:-1] >= P[:, 2:]), axis=0)
+    df = freq[1] - freq[0]
+    fn, zeta = poles_to_modal(s)
+    out = np.zeros(len(s), dtype=bool)
+    for r in range(len(s)):
+        w = np.abs(freq - fn[r]) <= max(zeta[r] * fn[r], df)
+        if np.any(loc[w]):
+            out[r] = True
+            continue
+        ph = np.unwrap(np.angle(rows[:, w]), axis=1)
+        out[r] = bool(w.sum() > 1 and np.any(np.ptp(ph, axis=1) >= np.pi / 4))
+    return out
+
+
 def _residual_terms_only(freq, rows, form):
     """Least-squares fit of the lower and upper residual terms alone (no mode)."""
     from .lsfd import FORM_POWER
@@ -409,6 +447,10 @@ def _weakest(freq, rows, synthesis, s, sig, form, opt, refit):
     if weak.size:
         r = weak[np.argmin(sig[weak])]
         return r, f"insignificant: explains {100 * sig[r]:.1f} % of the response at its frequency"
+    peak = _has_peak(freq, rows, s)
+    if not peak.all():
+        r = int(np.flatnonzero(~peak)[0])
+        return r, "no peak and no phase turn in its half-power band in any FRF of its group"
     above, ratio = _above_noise(freq, rows, synthesis, s, refit, form)
     if not above.all():
         r = int(np.argmin(ratio))
