@@ -40,7 +40,8 @@ MANIFEST = "run.json"
 class RunOptions:
     """Defaults of every stage (fractions of the sample rate fs where marked).
 
-    frf_top : FRFs up to frf_top × fs (0.3125: inside a front end's anti-alias corner at 0.4 fs)
+    frf_top : FRFs up to frf_top × fs (1/2.56 = 0.390625: an analyser's usable bandwidth under its
+        anti-alias filter; the lsce band then ends where the coherence and force fail)
     band : lsce band (Hz); default: where the coherence and the force spectrum support the
         estimate (:func:`tiremodal_cli.modes.default_band`, its reason in the modal file)
     exp_end : exponential window's value at the record's end (its damping is corrected)
@@ -54,7 +55,7 @@ class RunOptions:
         "mobility" or "receptance" — the modes should not depend on it
     """
 
-    frf_top: float = 0.3125
+    frf_top: float = 1 / 2.56
     band: tuple[float, float] | None = None
     exp_end: float | None = 0.05
     seed: int = 0
