@@ -279,11 +279,12 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
         else:
             fit, s, rej = _fit_group(k_lines, rows, back, Hflat, s, form, opt, g)
         rejected += rej
+        scatter = {c.representative.s: float(np.std([m.freq_hz for m in c.members])) for c in d.selected()}
         if fit is not None:
             synth += back @ fit.synthesis
             for k in range(s.size):
                 phys = back @ fit.residues[:, k]
-                found.append((s[k], g, phys, float(fit.significance[k])))
+                found.append((s[k], g, phys, float(fit.significance[k]), scatter.get(complex(s[k]), 0.0)))
         if progress:
             progress(i + 1, len(groups))
     if not found:
@@ -481,9 +482,10 @@ def _off_edges(modes, f_lo, f_hi, exp_tau_s):
 
 
 def _merge(found, opt):
-    """One mode per physical pole: poles of different groups within 0.2 % in frequency and
-    20 % in damping are one mode seen in several orders (leakage, coupling); its shape is
-    the sum of the groups' shares, its pole the dominant group's.
+    """One mode per physical pole: poles of different groups within 3 σ of their scatter over
+    the model orders (and at most 0.2 %) in frequency and 20 % in damping are one mode seen
+    in several orders (leakage, coupling); its shape is the sum of the groups' shares, its
+    pole the dominant group's.
 
     Returns list of (s, group, physical residues, significance, {group: energy share}).
     """
@@ -500,7 +502,11 @@ def _merge(found, opt):
                     and abs(zeta[j] - zeta[i]) <= 0.05 * zeta[i]):
                 used[j] = True
         same = [j for j in range(len(found)) if not used[j] and found[j][1] != found[i][1] or j == i]
-        same = [j for j in same if abs(fn[j] - fn[i]) <= 2e-3 * fn[i] and abs(zeta[j] - zeta[i]) <= 0.2 * zeta[i]]
+        # one pole seen in several groups agrees within the estimates' scatter over the
+        # model orders (3 σ); two modes of neighbouring orders (opposite n = 0 and 1 lie
+        # 0.05 % apart) do not, however close
+        same = [j for j in same if abs(fn[j] - fn[i]) <= min(2e-3 * fn[i], 3 * np.hypot(found[i][4], found[j][4]))
+                and abs(zeta[j] - zeta[i]) <= 0.2 * zeta[i] or j == i]
         groups_seen = {}
         for j in same:
             if found[j][1] in groups_seen and j != i:
@@ -547,7 +553,13 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
         live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels]
         locs = [r.channel_location[i] for i in live]
         if "tread" in locs:
-            classes = classify(res.freq_hz, res.shapes[:, live], r.point_angle, locs, res.significance)
+            classes = classify(res.freq_hz, res.shapes[:, live], r.point_angle, locs, res.significance,
+                               res.damping_ratio)
+            res.meta["crowds"] = [{"frequency_hz": float(res.freq_hz[i]), "n_spatial": c.n_spatial,
+                                   "n_candidates": list(c.n_candidates),
+                                   "reason": "orders aliasing onto one spatial order lie within one half-power "
+                                             "bandwidth by the branch's dispersion: the order cannot be told"}
+                                  for i, c in enumerate(classes) if c.crowd]
     table = table_from_result(res, classes, point_angle=r.point_angle, point_index=r.point_index,
                               channel_name=r.channel_name, channel_location=r.channel_location,
                               channel_angle=r.channel_angle, form=r.form)
