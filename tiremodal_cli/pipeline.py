@@ -212,9 +212,15 @@ def _sensitivity(res, n_max: int) -> dict:
     """Normalised sensitivities ∂ln f/∂ln p of the final model (its effects included) at its
     identified parameters, for the paper's parameters and n = 1 … n_max."""
     ns, br, S = coefficients(res.parameters, PAPER_STUDY, n_max, res.effects or None)
+    # a coefficient that cannot be computed is an explicit null with its reason, never NaN
+    nulls = [{"n": int(ns[i]), "branch": str(br[i]), "parameter": k,
+              "reason": "not finite at the final model's parameters (no such mode of the model there)"}
+             for i in range(len(ns)) for j, k in enumerate(PAPER_STUDY) if not np.isfinite(S[i, j])]
     return {"parameters": res.parameters.to_dict(), "effects": res.effects, "names": list(PAPER_STUDY),
-            "coefficients": [{"n": int(n), "branch": str(b), **{k: float(S[i, j]) for j, k in enumerate(PAPER_STUDY)}}
-                             for i, (n, b) in enumerate(zip(ns, br))]}
+            "coefficients": [{"n": int(n), "branch": str(b),
+                              **{k: float(S[i, j]) if np.isfinite(S[i, j]) else None for j, k in enumerate(PAPER_STUDY)}}
+                             for i, (n, b) in enumerate(zip(ns, br))],
+            "nulls": nulls}
 
 
 def read_manifest(outdir) -> dict | None:

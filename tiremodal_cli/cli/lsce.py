@@ -76,7 +76,7 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, 
     if as_json:
         echo_json({"modes": rows, "clusters": table.clusters, "rejected_modes": table.rejected,
                    "band_hz": table.meta["band_hz"], "band_reason": table.meta.get("band_reason"),
-                   "spatial": table.meta["spatial"],
+                   "spatial": table.meta["spatial"], "crowds": table.meta.get("crowds", []),
                    "exp_tau_s": table.meta["exp_tau_s"],
                    "fit_error_median": float(np.nanmedian(table.fit_error)), "output": str(output)})
     else:
@@ -85,7 +85,8 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, 
         for row in rows:
             click.echo(f"{row['mode']:4d} {row['frequency_hz']:9.3f} {100 * row['damping_ratio']:8.3f} "
                        f"{row['mpc']:5.2f} {row.get('n', ''):>3} {row.get('branch') or '':>8} "
-                       f"{row.get('n_confidence', float('nan')):5.2f}")
+                       + (f"{row['n_confidence']:5.2f}" if 'n_confidence' in row else f"{'':>5}")
+                       + (f"  crowd: n in {row['n_candidates']}" if row.get('crowd') else ""))
 
 
 def _plots(table, r, stab, macp, shapes, synth, overwrite):
