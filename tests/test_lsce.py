@@ -346,3 +346,32 @@ def test_real_beam_same_modes_in_every_form(form):
         assert np.min(np.abs(res.freq_hz / ref - 1)) < 1e-3, (form, ref, res.freq_hz)
     assert res.freq_hz.size <= len(BEAM_MODES) + 1, (form, res.freq_hz)
     assert np.nanmedian(res.fit_error) < 0.2
+
+
+def test_plscf_known_poles_and_the_real_beam():
+    """pLSCF (``--method plscf``): the known 4-mode system's poles within 1e-6 (damping 1e-4),
+    and the real beam's six reference modes within 0.1 % with at most one more."""
+    rng = np.random.default_rng(3)
+    fn, zeta = np.array([31.0, 47.5, 52.0, 90.0]), np.array([0.01, 0.02, 0.015, 0.03])
+    f = np.arange(0, 150, 0.25)
+    H = mdof_frf(f, fn, zeta, rng.standard_normal((4, 6)))
+    res = estimate_modes(f, H, form="receptance", opt=ModalOptions(band_hz=(10, 140), max_order=30, method="plscf"))
+    assert_allclose(res.freq_hz, fn, rtol=1e-6)
+    assert_allclose(res.damping_ratio, zeta, rtol=1e-4)
+    Hb = np.array([np.genfromtxt(BEAM / f"meas_point_{i}.txt", dtype=complex) for i in (1, 2, 3)])[None]
+    res = estimate_modes(np.arange(1001.0), Hb, opt=ModalOptions(band_hz=(20, 990), max_order=60, method="plscf"))
+    for ref in BEAM_MODES:
+        assert np.min(np.abs(res.freq_hz / ref - 1)) < 1e-3, (ref, res.freq_hz)
+    assert res.freq_hz.size <= len(BEAM_MODES) + 1
+
+
+def test_method_both_marks_confirmed_modes(tmp_path):
+    """``lsce --method both`` on the real beam: every reference mode is found by LSCE and
+    confirmed by pLSCF (agreement within a quarter of its half-power half-width)."""
+    res = run_cli(["lsce", BEAM / "beam_frf.uff", "-o", tmp_path / "beam.h5", "--band", 20, 990, "--max-order", 60,
+                   "--method", "both", "--json"])
+    assert res.exit_code == 0, res.output
+    modes = json.loads(res.stdout)["modes"]
+    for ref in BEAM_MODES:
+        k = int(np.argmin([abs(m["frequency_hz"] / ref - 1) for m in modes]))
+        assert abs(modes[k]["frequency_hz"] / ref - 1) < 1e-3 and modes[k]["confirmed"] is True, (ref, modes[k])

@@ -40,7 +40,7 @@ FORMAT_VERSION = 1
 STATUS_CODES = {"new": 0, "f": 1, "fd": 2, "fv": 3, "stable": 4}
 COLUMNS = ("mode", "frequency_hz", "damping_ratio", "n", "branch", "n_confidence", "branch_confidence",
            "mpc", "significance", "n_spatial", "n_aliased", "pair", "splitting_hz", "in_order", "group",
-           "frequency_uncertainty_hz", "crowd", "n_candidates")
+           "frequency_uncertainty_hz", "crowd", "n_candidates", "confirmed")
 
 
 @dataclass(frozen=True)
@@ -133,6 +133,9 @@ def to_rows(t: ModalTable) -> list[dict]:
         row = {"mode": i + 1, "frequency_hz": float(t.frequency_hz[i]), "damping_ratio": float(t.damping_ratio[i]),
                "mpc": float(t.mpc[i]), "significance": float(t.significance[i]), "group": int(t.group[i]),
                "frequency_uncertainty_hz": None if not np.isfinite(unc[i]) else float(unc[i])}
+        conf = (t.meta or {}).get("confirmed")
+        if conf is not None and len(conf) == t.n_modes:
+            row["confirmed"] = bool(conf[i])
         if t.n[i] >= 0:
             row.update(n=int(t.n[i]), branch=t.branch[i] or None, n_confidence=float(t.n_confidence[i]),
                        branch_confidence=float(t.branch_confidence[i]), n_spatial=int(t.n_spatial[i]),

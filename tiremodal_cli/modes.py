@@ -8,6 +8,7 @@ physical FRFs. Damping is corrected for the exponential window recorded in the F
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from dataclasses import dataclass, field
 
@@ -17,6 +18,7 @@ from threadpoolctl import threadpool_limits
 from .errors import DataFormatError, ParameterError
 from .lsce import poles_to_modal, principal_responses, sweep, sweep_poly
 from .lsfd import FORM_POWER, lsfd, lsfd_participation, mpc, significance
+from .plscf import sweep_plscf
 from .spatial import decompose
 from .stabilization import StabilizationOptions, stabilize
 from .windows import correct_poles
@@ -39,6 +41,9 @@ class ModalOptions:
     max_order : highest model order of the sweep (orders 2 … max_order)
     spatial : "auto" (split into circumferential orders when the points go round a tread),
               "on" or "off"
+    method : pole estimator: "lsce", "plscf" (poly-reference LSCF, :mod:`.plscf`), or
+              "both" (:func:`modal_table_from_frf` runs the two and marks the modes they
+              agree on as confirmed)
     min_significance : reject a mode explaining less than this share of the response at
               its own frequency (a pole fitted to noise)
     """
@@ -49,10 +54,13 @@ class ModalOptions:
     min_significance: float = 0.05
     stabilization: StabilizationOptions = StabilizationOptions()
     rtol_svd: float = 1e-4
+    method: str = "lsce"
 
     def check(self):
         if self.spatial not in ("auto", "on", "off"):
             raise ParameterError(f"spatial={self.spatial!r}; allowed: auto, on, off")
+        if self.method not in ("lsce", "plscf", "both"):
+            raise ParameterError(f"method={self.method!r}; allowed: lsce, plscf, both")
         if not 2 <= self.max_order <= 400:
             raise ParameterError(f"max_order={self.max_order} must be 2 … 400")
 
@@ -264,7 +272,13 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
         b = principal_responses(k_lines, rows, None, rtol=opt.rtol_svd)
         n_h = rows.shape[0] // n_live
-        if spatial and POLY and n_h == 2:
+        if opt.method == "plscf":
+            poly = spatial and POLY and n_h == 2
+            Y3 = rows.reshape(n_h, n_live, -1).transpose(1, 0, 2) if poly else rows[:, None, :]
+            poles = sweep_plscf(k_lines, Y3, range(1, (POLY_ORDER if poly else group_max) + 1))
+            if not poly:  # one reference: no participation to compare, shapes from the band
+                poles = [dataclasses.replace(op, participation=None) for op in poles]
+        elif spatial and POLY and n_h == 2:
             # the cos and sin components as two references: split pairs resolve
             irf = np.fft.ifft(rows.reshape(n_h, n_live, -1).transpose(1, 0, 2), axis=-1)
             poles = sweep_poly(irf, range(1, POLY_ORDER + 1), b.dt, b.f_lo, b.width_hz)
@@ -522,6 +536,17 @@ def _merge(found, opt):
     return out
 
 
+def confirmed(a: "ModalResult", b: "ModalResult") -> np.ndarray:
+    """Which modes of ``a`` the estimate ``b`` confirms: a mode of b within a quarter of
+    a's half-power half-width (|Δf| ≤ ζ f / 4 — two modes that close cannot be told
+    apart, so the two estimators saw one mode) and with a damping ratio within 30 %."""
+    out = np.zeros(a.freq_hz.size, dtype=bool)
+    for i, (f, z) in enumerate(zip(a.freq_hz, a.damping_ratio)):
+        near = np.abs(b.freq_hz - f) <= 0.25 * z * f
+        out[i] = bool(np.any(near & (np.abs(b.damping_ratio - z) <= 0.3 * z)))
+    return out
+
+
 def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None, force_autospectrum=None):
     """The whole modal stage on an FRFResult: modes, and the tyre classification when the
     points go round a tread.
@@ -544,10 +569,18 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
         opt = replace(opt, band_hz=band)
     else:
         why = "given"
+    if opt.method == "both":
+        table, res = modal_table_from_frf(r, replace(opt, method="lsce"), progress=progress)
+        other, res2 = modal_table_from_frf(r, replace(opt, method="plscf"), progress=progress)
+        table.meta["band_reason"] = why
+        table.meta["method"] = "both"
+        table.meta["confirmed"] = confirmed(res, res2).tolist()
+        return table, res
 
     res = estimate_modes(r.freq_hz, r.H, point_angle=r.point_angle, channel_location=r.channel_location,
                          form=r.form, exp_tau_s=r.exp_tau_s, opt=opt, progress=progress)
     res.meta["band_reason"] = why
+    res.meta["method"] = opt.method
     classes = None
     if res.meta["spatial"]:
         live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels]

@@ -34,6 +34,8 @@ def read_any_frf(path: Path, mapping=None):
               help="Highest model order of the sweep (per circumferential order: at most 24).")
 @click.option("--spatial", type=click.Choice(["auto", "on", "off"]), default="auto", show_default=True,
               help="Split tyre FRFs into circumferential orders before the sweep.")
+@click.option("--method", type=click.Choice(["lsce", "plscf", "both"]), default="lsce", show_default=True,
+              help="Pole estimator; both: run LSCE and pLSCF, mark the modes they agree on as confirmed.")
 @click.option("--tol-freq", type=float, default=0.01, show_default=True, help="Stability: relative frequency.")
 @click.option("--tol-damping", type=float, default=0.05, show_default=True, help="Stability: relative damping.")
 @click.option("--tol-mac", type=float, default=0.98, show_default=True, help="Stability: shape MAC.")
@@ -48,7 +50,7 @@ def read_any_frf(path: Path, mapping=None):
 @click.option("--plot-synthesis", type=click.Path(dir_okay=False, path_type=Path))
 @overwrite_option
 @json_option
-def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, tol_mac, min_significance, mapping,
+def lsce_cmd(frf_file, output, band, max_order, spatial, method, tol_freq, tol_damping, tol_mac, min_significance, mapping,
              csv_out, plot_stabilization, plot_mac, plot_shapes, plot_synthesis, overwrite, as_json):
     """Estimate modes of FRF_FILE (FRF HDF5 or UFF 58 FRFs) into OUTPUT.
 
@@ -60,7 +62,7 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, 
         if o is not None:
             check_overwrite(o, overwrite)
     r = read_any_frf(frf_file, mapping)
-    opt = ModalOptions(band_hz=tuple(band) if band else None, max_order=max_order, spatial=spatial,
+    opt = ModalOptions(band_hz=tuple(band) if band else None, max_order=max_order, spatial=spatial, method=method,
                        min_significance=min_significance,
                        stabilization=StabilizationOptions(tol_freq=tol_freq, tol_damping=tol_damping, tol_mac=tol_mac))
     bar = Progress("lsce")
