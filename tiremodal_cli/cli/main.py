@@ -72,7 +72,7 @@ def cli(verbose, quiet):
 
 
 def _register():
-    from . import (batch, diagnose, frf, identify, info, ingest, lsce, mac, predict, report,  # noqa: F401
+    from . import (batch, diagnose, export, frf, identify, info, ingest, lsce, mac, predict, report,  # noqa: F401
                    run, sensitivity, simulate)
 
 
