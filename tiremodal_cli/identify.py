@@ -339,14 +339,22 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
         w = np.ones(len(modes))
     w = w / np.sqrt(np.mean(w**2))
 
-    def residuals(logx):
-        p, eff = _apply(base, opt, names, logx)
-        f = model_frequencies(p, ns, br, eff or None, mem, f_meas)
+    ev = _Evaluator(base, opt, names, ns, br, mem, f_meas)
+
+    def residuals_batch(logX):
+        """(k, S) log parameters → (S, m) weighted relative errors (one array call)."""
+        f = ev.frequencies(logX)
         r = (f - f_meas) / f_meas
         return np.where(np.isfinite(r), r, 10.0) * w
 
+    def residuals(logx):
+        return residuals_batch(np.asarray(logx, dtype=float)[:, None])[0]
+
+    def objective_batch(logX):
+        return np.sqrt(np.mean(residuals_batch(logX) ** 2, axis=1))
+
     def objective(logx):
-        return float(np.sqrt(np.mean(residuals(logx) ** 2)))
+        return float(objective_batch(np.asarray(logx, dtype=float)[:, None])[0])
 
     history = []
 
@@ -362,15 +370,16 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
         x0 = np.array([np.log(opt.start[n]) if opt.start.get(n, 0) > 0 else mid[i] for i, n in enumerate(names)])
         x0 = np.clip(x0, logb[:, 0] + 1e-9, logb[:, 1] - 1e-9)
     de = scipy.optimize.differential_evolution(
-        objective, bounds=list(map(tuple, logb)), popsize=max(1, math.ceil(opt.population / k)),
+        objective_batch, bounds=list(map(tuple, logb)), popsize=max(1, math.ceil(opt.population / k)),
         maxiter=opt.generations, recombination=opt.crossover,
         mutation=tuple(opt.mutation) if isinstance(opt.mutation, (tuple, list)) else opt.mutation, seed=opt.seed, tol=opt.tol,
-        atol=0, polish=False, updating="deferred", workers=1, callback=callback, init="latinhypercube", x0=x0)
+        atol=0, polish=False, updating="deferred", vectorized=True, callback=callback, init="latinhypercube",
+        x0=x0)
     ls = scipy.optimize.least_squares(residuals, de.x, bounds=(logb[:, 0], logb[:, 1]), x_scale=1.0,
                                       xtol=1e-14, ftol=1e-14, gtol=1e-14)
     x = ls.x if objective(ls.x) <= de.fun else de.x
     history.append((len(history) + 1, objective(x)))
-    J = _jacobian(residuals, x)
+    J = _jacobian(residuals_batch, x)
     r = residuals(x)
     dof = max(len(modes) - k, 1)
     # residual variance, but never below the floor of a measured frequency's uncertainty:
@@ -405,14 +414,70 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
                      options=opt)
 
 
-def _jacobian(fun, x, h=1e-6):
-    f0 = fun(x)
-    J = np.empty((f0.size, x.size))
-    for i in range(x.size):
-        dx = np.zeros_like(x)
-        dx[i] = h
-        J[:, i] = (fun(x + dx) - fun(x - dx)) / (2 * h)
-    return J
+def _jacobian(fun_batch, x, h=1e-6):
+    """Central differences of ``fun_batch`` ((k, S) → (S, m)) at ``x``: all 2k points in one call."""
+    k = x.size
+    X = np.concatenate([x[:, None] + h * np.eye(k), x[:, None] - h * np.eye(k)], axis=1)
+    F = fun_batch(X)
+    return ((F[:k] - F[k:]) / (2 * h)).T
+
+
+class _Evaluator:
+    """Model frequencies of the measured (n, branch) for a whole population of log
+    parameter vectors in one array call (no per-call object rebuilding).
+
+    Built once per fit: which columns are structural parameters, which are effect
+    parameters (clipped to their physical limits, as :func:`_apply` does), the fixed
+    effects resolved once. Block effects and the seed model go through
+    :func:`tiremodal_cli.model.stacked_branch_frequencies`; a coupling effect (a lumped
+    mass) member by member through :func:`model_frequencies`. ``calls`` and
+    ``evaluations`` count array calls and parameter sets (for the benchmarks).
+    """
+
+    def __init__(self, base, opt, names, ns, br, mem, f_meas):
+        from .effects import resolve_effects
+
+        self.base, self.opt, self.names = base, opt, list(names)
+        self.ns, self.br, self.mem, self.f_meas = ns, br, mem, f_meas
+        self.struct = [(i, nm) for i, nm in enumerate(names) if "." not in nm]
+        self.free_eff = {}
+        for i, nm in enumerate(names):
+            if "." in nm:
+                e, k = nm.split(".", 1)
+                par = {q.name: q for q in get_effect(e).parameters}[k]
+                self.free_eff.setdefault(e, []).append((i, k, par.lower, par.upper))
+        fixed = {k: dict(v) for k, v in opt.effects.items()}
+        for e in self.free_eff:
+            fixed.setdefault(e, {})
+        self.effects = resolve_effects(fixed)  # defaults overlaid, sorted as model_frequencies has them
+        self.coupling = any(e.couple is not None for e, _ in self.effects)
+        self.col = np.where(br == "opposite", 1, np.where(br == "cavity", 2, 0))
+        self.calls = 0
+        self.evaluations = 0
+
+    def frequencies(self, logX) -> np.ndarray:
+        from .model import ParamStack, stacked_branch_frequencies
+
+        logX = np.asarray(logX, dtype=float)
+        S = logX.shape[1]
+        self.calls += 1
+        self.evaluations += S
+        if self.coupling:
+            out = np.empty((S, self.ns.size))
+            for j in range(S):
+                p, eff = _apply(self.base, self.opt, self.names, logX[:, j])
+                out[j] = model_frequencies(p, self.ns, self.br, eff or None, self.mem, self.f_meas)
+            return out
+        vals = np.exp(logX)
+        P = ParamStack.broadcast(self.base, S, **{nm: vals[i] for i, nm in self.struct})
+        eff = []
+        for e, v in self.effects:
+            v = dict(v)
+            for i, k, lo, hi in self.free_eff.get(e.name, ()):
+                v[k] = np.clip(vals[i], lo, hi)
+            eff.append((e, v))
+        F = stacked_branch_frequencies(self.ns, P, eff)
+        return F[:, np.arange(self.ns.size), self.col]
 
 
 def predict_table(res: FitResult, n_max: int, *, measured=()) -> list[dict]:

@@ -583,3 +583,160 @@ def frf(model: ModalModel, freq_hz, damping_ratio, out_locations, out_angles, in
     elif form == "accelerance":
         H = H * (-(w**2))
     return H
+
+
+class ParamStack:
+    """:class:`TyreParameters` with every field a (N,) array: one value per stacked block.
+
+    What the effects' ``modify_block`` hooks see when a whole population of candidate
+    parameter sets is evaluated at once (:func:`stacked_branch_frequencies`); ``m_w`` is
+    None for a clamped rim. Not validated: the caller (an optimiser inside its bounds) is.
+    """
+
+    FIELDS = ("R", "b", "P0", "rhoA", "m_s", "EI", "k_r1", "k_r2", "m_w")
+
+    def __init__(self, **values):
+        for k in self.FIELDS:
+            v = values.get(k)
+            setattr(self, k, None if v is None else np.asarray(v, dtype=float))
+
+    @classmethod
+    def broadcast(cls, p: TyreParameters, size: int, **arrays) -> "ParamStack":
+        """``size`` copies of ``p`` with the fields in ``arrays`` ((size,) each) replaced."""
+        vals = {k: (None if getattr(p, k) is None else np.full(size, float(getattr(p, k)))) for k in cls.FIELDS}
+        vals.update({k: np.broadcast_to(np.asarray(v, dtype=float), (size,)) for k, v in arrays.items()})
+        return cls(**vals)
+
+    @property
+    def T(self):
+        return self.P0 * self.b * self.R
+
+    def take(self, idx) -> "ParamStack":
+        return ParamStack(**{k: (None if getattr(self, k) is None else getattr(self, k)[idx]) for k in self.FIELDS})
+
+
+def _take_values(values: Mapping, idx) -> dict:
+    return {k: (np.asarray(v)[idx] if np.ndim(v) else v) for k, v in values.items()}
+
+
+def _stack_block(n, p: ParamStack, effects, freq_hz=None) -> Block:
+    """Blocks of the orders ``n`` ((N,) int) for the parameter sets ``p`` (one per row).
+
+    Either no n is 1, or every n is 1 (then the block is 3 × 3 with a rim, and an
+    effect may add a coordinate): the stacks of :func:`stacked_branch_frequencies`.
+    """
+    nf = n.astype(float)
+    N = n.size
+    Kn = p.EI * nf**4 / p.R**4 + p.T * nf**2 / p.R**2 + p.k_r1
+    rim = p.m_w is not None and N > 0 and n[0] == 1
+    d = 3 if rim else 2
+    M = np.zeros((N, d, d))
+    K = np.zeros((N, d, d))
+    M[:, 0, 0], M[:, 1, 1] = p.rhoA, p.m_s
+    K[:, 0, 0] = Kn
+    K[:, 0, 1] = K[:, 1, 0] = -p.k_r1
+    K[:, 1, 1] = p.k_r1 + p.k_r2
+    if rim:
+        M[:, 2, 2] = p.m_w / (np.pi * p.R)
+        K[:, 1, 2] = K[:, 2, 1] = -p.k_r2
+        K[:, 2, 2] = p.k_r2
+    blk = Block(M, K, ("U", "S", "W") if rim else ("U", "S"))
+    for eff, values in effects:
+        if eff.modify_block is not None:
+            blk = eff.modify_block(n, blk, values, p, freq_hz)
+    return blk
+
+
+def _stack_eigh(M, K):
+    """Eigenpairs of stacked pencils with diagonal M (every block here): M scaled out and
+    one batched ``numpy.linalg.eigh`` call. Returns ω² (N, d) ascending and M-normalised
+    vectors (N, d, d), column r the r-th mode."""
+    s = 1.0 / np.sqrt(np.diagonal(M, axis1=-2, axis2=-1))
+    w2, v = np.linalg.eigh(K * s[:, :, None] * s[:, None, :])
+    return np.clip(w2, 0.0, None), v * s[:, :, None]
+
+
+def _stack_labels(vecs, dofs, M):
+    """:func:`_branch` of every mode of a stack: (N, d) array of 0 same, 1 opposite,
+    2 cavity, 3 rim (the same rules: cavity if its coordinate holds > half the kinetic
+    energy, rim if the rim holds the largest share, else the sign of U·S)."""
+    md = np.diagonal(M, axis1=-2, axis2=-1)
+    energy = md[:, :, None] * vecs**2  # (N, dof, mode)
+    total = energy.sum(axis=1)
+    frac = {k: energy[:, [j for j, d in enumerate(dofs) if d == k], :].sum(axis=1) / total for k in set(dofs)}
+    u, s = vecs[:, dofs.index("U"), :], vecs[:, dofs.index("S"), :]
+    lab = np.where(u * s >= 0, 0, 1)
+    if "W" in frac:
+        fmax = np.max(np.stack(list(frac.values())), axis=0)
+        lab = np.where(frac["W"] >= fmax, 3, lab)
+    if "A" in frac:
+        lab = np.where(frac["A"] > 0.5, 2, lab)
+    return lab
+
+
+def stacked_branch_frequencies(ns, p: ParamStack, effects=()) -> np.ndarray:
+    """Same-, opposite-direction and cavity frequencies of the orders ``ns`` for a whole
+    stack of parameter sets in one array call (block effects only).
+
+    The vectorised form of :func:`branch_frequencies` (the same rules, the same numbers to
+    rounding): orders other than 1 of every parameter set are one stack of 2 × 2 pencils
+    solved in closed form; n = 1 of every set one stack of 3 × 3 (rim) or 4 × 4 (and the
+    cavity) pencils for one batched ``eigh``, its modes labelled as :func:`_branch` does;
+    frequency-dependent effects iterated to a fixed point elementwise over the stack.
+
+    Parameters
+    ----------
+    ns : (k,) array of int, ≥ 0
+    p : ParamStack with (S,) fields — S parameter sets
+    effects : sequence of (Effect, values), values scalars or (S,) arrays
+
+    Returns
+    -------
+    freq_hz : (S, k, 3) ndarray, Hz — ``[..., 0]`` same, ``[..., 1]`` opposite,
+        ``[..., 2]`` the lowest cavity mode (NaN where there is no such mode)
+    """
+    ns = np.asarray(ns, dtype=int)
+    eff = tuple(effects)
+    if any(e.couple is not None for e, _ in eff):
+        raise ParameterError("stacked_branch_frequencies takes block effects only")
+    S = p.k_r1.size
+    out = np.full((S, ns.size, 3), np.nan)
+    freq_dep = any(e.frequency_dependent for e, _ in eff)
+    uniq = np.unique(ns)
+    rest = uniq[uniq != 1]
+    if rest.size:
+        member = np.repeat(np.arange(S), rest.size)
+        nn = np.tile(rest, S)
+        pf = p.take(member)
+        ef = tuple((e, _take_values(v, member)) for e, v in eff)
+        blk = _stack_block(nn, pf, ef)
+        w2 = _pair_eigenvalues(blk.M, blk.K)
+        if freq_dep:
+            for r in range(2):
+                def g(f, r=r):
+                    b_f = _stack_block(nn, pf, ef, freq_hz=f)
+                    return np.sqrt(_pair_eigenvalues(b_f.M, b_f.K)[:, r]) / (2 * np.pi)
+                w2[:, r] = (2 * np.pi * fixed_point_hz(g, np.sqrt(w2[:, r]) / (2 * np.pi))) ** 2
+        f = (np.sqrt(w2) / (2 * np.pi)).reshape(S, rest.size, 2)
+        idx = np.searchsorted(rest, ns)
+        hit = (idx < rest.size) & (rest[np.minimum(idx, rest.size - 1)] == ns)
+        out[:, hit, :2] = f[:, idx[hit], :]
+    if np.any(ns == 1):
+        n1 = np.ones(S, dtype=int)
+        blk = _stack_block(n1, p, eff)
+        w2, vecs = _stack_eigh(blk.M, blk.K)
+        if freq_dep:
+            for r in range(w2.shape[1]):
+                def g(f, r=r):
+                    b_f = _stack_block(n1, p, eff, freq_hz=f)
+                    return np.sqrt(_stack_eigh(b_f.M, b_f.K)[0][:, r]) / (2 * np.pi)
+                f = fixed_point_hz(g, np.sqrt(w2[:, r]) / (2 * np.pi))
+                b_f = _stack_block(n1, p, eff, freq_hz=f)
+                w2_f, v_f = _stack_eigh(b_f.M, b_f.K)
+                w2[:, r], vecs[:, :, r] = w2_f[:, r], v_f[:, :, r]
+        lab = _stack_labels(vecs, blk.dofs, blk.M)
+        f1 = np.sqrt(w2) / (2 * np.pi)
+        for col in range(3):
+            cand = np.where(lab == col, f1, np.inf).min(axis=1)
+            out[:, ns == 1, col] = np.where(np.isfinite(cand), cand, np.nan)[:, None]
+    return out
