@@ -711,12 +711,16 @@ def stacked_branch_frequencies(ns, p: ParamStack, effects=()) -> np.ndarray:
         ef = tuple((e, _take_values(v, member)) for e, v in eff)
         blk = _stack_block(nn, pf, ef)
         w2 = _pair_eigenvalues(blk.M, blk.K)
-        if freq_dep:
-            for r in range(2):
-                def g(f, r=r):
-                    b_f = _stack_block(nn, pf, ef, freq_hz=f)
-                    return np.sqrt(_pair_eigenvalues(b_f.M, b_f.K)[:, r]) / (2 * np.pi)
-                w2[:, r] = (2 * np.pi * fixed_point_hz(g, np.sqrt(w2[:, r]) / (2 * np.pi))) ** 2
+        if freq_dep:  # both roots of every block in one fixed point: each entry (block, root r)
+            nn2, root = np.repeat(nn, 2), np.tile([0, 1], nn.size)
+            pf2 = pf.take(np.repeat(np.arange(nn.size), 2))
+            ef2 = tuple((e, _take_values(v, np.repeat(np.arange(nn.size), 2))) for e, v in ef)
+            at = np.arange(nn2.size)
+
+            def g(f):
+                b_f = _stack_block(nn2, pf2, ef2, freq_hz=f)
+                return np.sqrt(_pair_eigenvalues(b_f.M, b_f.K)[at, root]) / (2 * np.pi)
+            w2 = ((2 * np.pi * fixed_point_hz(g, np.sqrt(w2.ravel()) / (2 * np.pi))) ** 2).reshape(-1, 2)
         f = (np.sqrt(w2) / (2 * np.pi)).reshape(S, rest.size, 2)
         idx = np.searchsorted(rest, ns)
         hit = (idx < rest.size) & (rest[np.minimum(idx, rest.size - 1)] == ns)
@@ -725,15 +729,20 @@ def stacked_branch_frequencies(ns, p: ParamStack, effects=()) -> np.ndarray:
         n1 = np.ones(S, dtype=int)
         blk = _stack_block(n1, p, eff)
         w2, vecs = _stack_eigh(blk.M, blk.K)
-        if freq_dep:
-            for r in range(w2.shape[1]):
-                def g(f, r=r):
-                    b_f = _stack_block(n1, p, eff, freq_hz=f)
-                    return np.sqrt(_stack_eigh(b_f.M, b_f.K)[0][:, r]) / (2 * np.pi)
-                f = fixed_point_hz(g, np.sqrt(w2[:, r]) / (2 * np.pi))
-                b_f = _stack_block(n1, p, eff, freq_hz=f)
-                w2_f, v_f = _stack_eigh(b_f.M, b_f.K)
-                w2[:, r], vecs[:, :, r] = w2_f[:, r], v_f[:, :, r]
+        if freq_dep:  # every mode r of every member in one fixed point: entries (member, r)
+            d = w2.shape[1]
+            rep = np.repeat(np.arange(S), d)
+            p_d, e_d = p.take(rep), tuple((e, _take_values(v, rep)) for e, v in eff)
+            root, at = np.tile(np.arange(d), S), np.arange(S * d)
+
+            def g(f):
+                b_f = _stack_block(np.ones(S * d, dtype=int), p_d, e_d, freq_hz=f)
+                return np.sqrt(_stack_eigh(b_f.M, b_f.K)[0][at, root]) / (2 * np.pi)
+            f = fixed_point_hz(g, np.sqrt(w2.ravel()) / (2 * np.pi))
+            b_f = _stack_block(np.ones(S * d, dtype=int), p_d, e_d, freq_hz=f)
+            w2_f, v_f = _stack_eigh(b_f.M, b_f.K)
+            w2 = w2_f[at, root].reshape(S, d)
+            vecs = v_f[at, :, root].reshape(S, d, d).transpose(0, 2, 1)
         lab = _stack_labels(vecs, blk.dofs, blk.M)
         f1 = np.sqrt(w2) / (2 * np.pi)
         for col in range(3):
