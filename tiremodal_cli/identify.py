@@ -430,8 +430,9 @@ class _Evaluator:
     Built once per fit: which columns are structural parameters, which are effect
     parameters (clipped to their physical limits, as :func:`_apply` does), the fixed
     effects resolved once. Block effects and the seed model go through
-    :func:`tiremodal_cli.model.stacked_branch_frequencies`; a coupling effect (a lumped
-    mass) member by member through :func:`model_frequencies`. ``calls`` and
+    :func:`tiremodal_cli.model.stacked_branch_frequencies`, one lumped mass through
+    :func:`tiremodal_cli.model.stacked_point_mass_pairs`; another coupling effect set by
+    set through :func:`model_frequencies`. ``calls`` and
     ``evaluations`` count array calls and parameter sets (for the benchmarks).
     """
 
@@ -451,19 +452,23 @@ class _Evaluator:
         for e in self.free_eff:
             fixed.setdefault(e, {})
         self.effects = resolve_effects(fixed)  # defaults overlaid, sorted as model_frequencies has them
-        self.coupling = any(e.couple is not None for e, _ in self.effects)
+        coupling = [e for e, _ in self.effects if e.couple is not None]
+        self.coupling = bool(coupling)
+        self.point_mass = (len(coupling) == 1 and bool(coupling[0].extra.get("point_mass"))
+                           and not np.any(br == "cavity"))
+        self.mem_code = np.array([{"lower": 0, "upper": 1}.get(m, -1) for m in mem])
         self.col = np.where(br == "opposite", 1, np.where(br == "cavity", 2, 0))
         self.calls = 0
         self.evaluations = 0
 
     def frequencies(self, logX) -> np.ndarray:
-        from .model import ParamStack, stacked_branch_frequencies
+        from .model import ParamStack, stacked_branch_frequencies, stacked_point_mass_pairs
 
         logX = np.asarray(logX, dtype=float)
         S = logX.shape[1]
         self.calls += 1
         self.evaluations += S
-        if self.coupling:
+        if self.coupling and not self.point_mass:  # a general coupling: the assembled problem, set by set
             out = np.empty((S, self.ns.size))
             for j in range(S):
                 p, eff = _apply(self.base, self.opt, self.names, logX[:, j])
@@ -477,6 +482,13 @@ class _Evaluator:
             for i, k, lo, hi in self.free_eff.get(e.name, ()):
                 v[k] = np.clip(vals[i], lo, hi)
             eff.append((e, v))
+        if self.point_mass:  # one lumped mass: the secular equation, as model_frequencies has it
+            (e_pm, v_pm), = [(e, v) for e, v in eff if e.couple is not None]
+            pairs = stacked_point_mass_pairs(max(2, int(self.ns.max())), P, v_pm[e_pm.extra["point_mass"]], eff)
+            pair = pairs[:, self.ns, self.col, :]  # (S, m, 2): lower, upper member
+            nearer = np.where(np.abs(pair[..., 1] - self.f_meas) < np.abs(pair[..., 0] - self.f_meas), 1, 0)
+            pick = np.where(self.mem_code >= 0, self.mem_code, nearer)
+            return np.take_along_axis(pair, pick[..., None], 2)[..., 0]
         F = stacked_branch_frequencies(self.ns, P, eff)
         return F[:, np.arange(self.ns.size), self.col]
 

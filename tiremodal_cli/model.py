@@ -726,26 +726,119 @@ def stacked_branch_frequencies(ns, p: ParamStack, effects=()) -> np.ndarray:
         hit = (idx < rest.size) & (rest[np.minimum(idx, rest.size - 1)] == ns)
         out[:, hit, :2] = f[:, idx[hit], :]
     if np.any(ns == 1):
-        n1 = np.ones(S, dtype=int)
-        blk = _stack_block(n1, p, eff)
-        w2, vecs = _stack_eigh(blk.M, blk.K)
-        if freq_dep:  # every mode r of every member in one fixed point: entries (member, r)
-            d = w2.shape[1]
-            rep = np.repeat(np.arange(S), d)
-            p_d, e_d = p.take(rep), tuple((e, _take_values(v, rep)) for e, v in eff)
-            root, at = np.tile(np.arange(d), S), np.arange(S * d)
-
-            def g(f):
-                b_f = _stack_block(np.ones(S * d, dtype=int), p_d, e_d, freq_hz=f)
-                return np.sqrt(_stack_eigh(b_f.M, b_f.K)[0][at, root]) / (2 * np.pi)
-            f = fixed_point_hz(g, np.sqrt(w2.ravel()) / (2 * np.pi))
-            b_f = _stack_block(np.ones(S * d, dtype=int), p_d, e_d, freq_hz=f)
-            w2_f, v_f = _stack_eigh(b_f.M, b_f.K)
-            w2 = w2_f[at, root].reshape(S, d)
-            vecs = v_f[at, :, root].reshape(S, d, d).transpose(0, 2, 1)
+        blk, w2, vecs = _stack_modes(np.ones(S, dtype=int), p, eff, freq_dep)
         lab = _stack_labels(vecs, blk.dofs, blk.M)
         f1 = np.sqrt(w2) / (2 * np.pi)
         for col in range(3):
             cand = np.where(lab == col, f1, np.inf).min(axis=1)
             out[:, ns == 1, col] = np.where(np.isfinite(cand), cand, np.nan)[:, None]
+    return out
+
+
+def _stack_modes(n, p: ParamStack, eff, freq_dep):
+    """Eigenpairs of a stack of blocks (as :func:`_solve_block`, one block per row):
+    the block (at no frequency), ω² (N, d) and M-normalised vectors (N, d, d). With a
+    frequency-dependent effect every mode r of every block is iterated to its own
+    frequency, all in one fixed point over entries (block, r)."""
+    N = n.size
+    blk = _stack_block(n, p, eff)
+    w2, vecs = _stack_eigh(blk.M, blk.K)
+    if freq_dep:
+        d = w2.shape[1]
+        rep = np.repeat(np.arange(N), d)
+        n_d, p_d, e_d = n[rep], p.take(rep), tuple((e, _take_values(v, rep)) for e, v in eff)
+        root, at = np.tile(np.arange(d), N), np.arange(N * d)
+
+        def g(f):
+            b_f = _stack_block(n_d, p_d, e_d, freq_hz=f)
+            return np.sqrt(_stack_eigh(b_f.M, b_f.K)[0][at, root]) / (2 * np.pi)
+        f = fixed_point_hz(g, np.sqrt(w2.ravel()) / (2 * np.pi))
+        b_f = _stack_block(n_d, p_d, e_d, freq_hz=f)
+        w2_f, v_f = _stack_eigh(b_f.M, b_f.K)
+        w2 = w2_f[at, root].reshape(N, d)
+        vecs = v_f[at, :, root].reshape(N, d, d).transpose(0, 2, 1)
+    return blk, w2, vecs
+
+
+def stacked_point_mass_pairs(n_max: int, p: ParamStack, m_a, effects=()) -> np.ndarray:
+    """:func:`point_mass_pairs` for a whole stack of parameter sets in one array call.
+
+    The same secular equation and rules (each root labelled by the mode it is most of,
+    the root nearest that mode kept as its lower member), solved by vectorised
+    bisection over every member and root at once.
+
+    Parameters
+    ----------
+    n_max : int
+    p : ParamStack with (S,) fields
+    m_a : float or (S,) array, kg
+    effects : block effects (values scalars or (S,) arrays); coupling ones are ignored
+
+    Returns
+    -------
+    pairs : (S, n_max + 1, 2, 2) ndarray, Hz — [s, n, branch (0 same, 1 opposite),
+        (lower, upper)]; NaN where (n, branch) has no mode; n = 0 lower = upper
+    """
+    eff = tuple(e for e in effects if e[0].couple is None)
+    freq_dep = any(e.frequency_dependent for e, _ in eff)
+    S = p.k_r1.size
+    lam, c2, lab_n, lab_b = [], [], [], []
+    rest = np.array([n for n in range(n_max + 1) if n != 1])
+    member = np.repeat(np.arange(S), rest.size)
+    for nn, pp, ee in ((np.tile(rest, S), p.take(member), tuple((e, _take_values(v, member)) for e, v in eff)),
+                       (np.ones(S, dtype=int), p, eff)):
+        blk, w2, vecs = _stack_modes(nn, pp, ee, freq_dep)
+        lab = _stack_labels(vecs, blk.dofs, blk.M)
+        L = np.where(nn == 0, 2.0, 1.0) * np.pi * pp.R
+        U = vecs[:, blk.dofs.index("U"), :]
+        d = w2.shape[1]
+        k = nn.size // S
+        lam.append(w2.reshape(S, k * d))
+        c2.append((U**2 / L[:, None]).reshape(S, k * d))
+        lab_n.append(np.broadcast_to(nn.reshape(S, k)[:, :, None], (S, k, d)).reshape(S, k * d))
+        lab_b.append(lab.reshape(S, k * d))
+    lam, c2 = np.concatenate(lam, axis=1), np.concatenate(c2, axis=1)
+    lab_n, lab_b = np.concatenate(lab_n, axis=1), np.concatenate(lab_b, axis=1)
+    order = np.argsort(lam, axis=1, kind="stable")
+    lam, c2 = np.take_along_axis(lam, order, 1), np.take_along_axis(c2, order, 1)
+    lab_n, lab_b = np.take_along_axis(lab_n, order, 1), np.take_along_axis(lab_b, order, 1)
+    R = lam.shape[1]
+    active = c2 > 1e-14 * c2.max(axis=1, keepdims=True)
+    # the active modes first (ascending), the rest (no pole) pushed to +inf with no weight
+    la = np.where(active, lam, np.inf)
+    aord = np.argsort(la, axis=1, kind="stable")
+    la, ca = np.take_along_axis(la, aord, 1), np.take_along_axis(np.where(active, c2, 0.0), aord, 1)
+    n_act = active.sum(axis=1)
+    ok = np.arange(R)[None, :] < n_act[:, None]
+    lo = np.concatenate([np.zeros((S, 1)), la[:, :-1]], axis=1)
+    a, b = np.where(ok, lo, 0.0), np.where(ok, la, 1.0)
+    ma = np.broadcast_to(np.asarray(m_a, dtype=float), (S,))[:, None]
+    lafin = np.where(np.isfinite(la), la, 0.0)
+    err = np.seterr(divide="ignore", invalid="ignore")  # a bisection midpoint may hit a pole exactly
+    # bisection as point_mass_pairs (Newton steps crawl here: the lower member's root sits
+    # next to its pole), stopped once every bracket is down to rounding
+    for _ in range(80):  # h(λ) = λ m_a Σ c²/(λ_r − λ) − 1 rises from −∞ to +∞ in each interval
+        mid = 0.5 * (a + b)
+        h = mid * ma * np.sum(ca[:, None, :] / (lafin[:, None, :] - mid[:, :, None]), axis=2) - 1.0
+        a, b = np.where(h < 0, mid, a), np.where(h < 0, b, mid)
+        if np.all(b - a <= 4 * np.finfo(float).eps * np.abs(b)):
+            break
+    roots = 0.5 * (a + b)  # (S, R): root k of member s (valid where ok)
+    share = ca[:, None, :] / (lafin[:, None, :] - roots[:, :, None]) ** 2
+    dom_act = np.argmax(np.nan_to_num(share, nan=np.inf), axis=2)  # index among the active-sorted modes
+    np.seterr(**err)
+    dom = np.take_along_axis(aord, dom_act, 1)  # index in λ order
+    dist = np.where((dom[:, :, None] == np.arange(R)[None, None, :]) & ok[:, :, None],
+                    np.abs(roots[:, :, None] - lam[:, None, :]), np.inf)  # (S, root, mode)
+    best = np.argmin(dist, axis=1)
+    has = np.isfinite(np.min(dist, axis=1))
+    lower = np.where(has, np.take_along_axis(roots, best, 1), lam)
+    upper_hz, lower_hz = np.sqrt(lam) / (2 * np.pi), np.sqrt(lower) / (2 * np.pi)
+    out = np.full((S, n_max + 1, 2, 2), np.nan)
+    rows = np.arange(S)
+    for r in range(R - 1, -1, -1):  # descending, so the lowest mode of each (n, branch) is written last
+        n_r, b_r = lab_n[:, r], lab_b[:, r]
+        sel = b_r < 2
+        out[rows[sel], n_r[sel], b_r[sel], 0] = lower_hz[sel, r]
+        out[rows[sel], n_r[sel], b_r[sel], 1] = np.where(n_r[sel] == 0, lower_hz[sel, r], upper_hz[sel, r])
     return out
