@@ -20,7 +20,8 @@ import pytest
 from tiremodal_cli.diagnose import diagnose
 from tiremodal_cli.effects import resolve_effects
 from tiremodal_cli.identify import FitOptions, fit, modes_from_rows
-from tiremodal_cli.model import ParamStack, TyreParameters, branch_frequencies, solve_modes, stacked_branch_frequencies
+from tiremodal_cli.model import (ParamStack, TyreParameters, branch_frequencies, point_mass_pairs, solve_modes,
+                                 stacked_branch_frequencies, stacked_point_mass_pairs)
 
 ROOT = Path(__file__).resolve().parents[1]
 BASE = ROOT / "tests" / "data" / "perf_baseline"
@@ -74,3 +75,21 @@ def test_a_stack_of_parameter_sets_equals_one_set_at_a_time(effects, m_w):
             assert got[s, 1, 2] == pytest.approx(cav.min(), rel=1e-12)
         else:
             assert np.isnan(got[s, 1, 2])
+
+
+@pytest.mark.parametrize("m_w", [None, 1000.0])
+@pytest.mark.parametrize("effects", [None, {"tangential": {"c_t": 1, "k_t": 2e6}}, {"viscoelastic": {"beta": 0.2}}])
+def test_a_stack_of_point_mass_problems_equals_one_at_a_time(effects, m_w):
+    rng = np.random.default_rng(11)
+    base = TyreParameters(m_w=m_w)
+    eff = resolve_effects({**(effects or {}), "added_mass": {"m_a": 1.0}})
+    k1, m_a = base.k_r1 * rng.uniform(0.5, 2, 4), rng.uniform(0.1, 3, 4)
+    got = stacked_point_mass_pairs(12, ParamStack.broadcast(base, 4, k_r1=k1), m_a, eff)
+    for s in range(4):
+        ref = point_mass_pairs(base.replace(k_r1=float(k1[s])), float(m_a[s]), 12, eff)
+        for n in range(13):
+            for c, b in enumerate(("same", "opposite")):
+                if (n, b) in ref:
+                    np.testing.assert_allclose(got[s, n, c], ref[(n, b)], rtol=1e-12)
+                else:
+                    assert np.all(np.isnan(got[s, n, c]))
