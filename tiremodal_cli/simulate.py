@@ -20,9 +20,20 @@ from . import __version__
 from .errors import ParameterError
 from .measurement import Measurement
 from .model import ModalModel, TyreParameters, frf, paper_damping, solve_modes
+from .ring import RingModes, RingParameters, elements_for, ring_frf, ring_modes, ring_observation
 
 __all__ = ["Channel", "Faults", "SimulationConfig", "Simulation", "simulate", "half_sine_spectrum",
-           "DEFAULT_CHANNELS", "CAMPAIGN_CONFIG", "simulate_campaign"]
+           "DEFAULT_CHANNELS", "CAMPAIGN_CONFIG", "simulate_campaign", "MODELS", "RING_DAMPING"]
+
+#: The generators: "paper" — the paper's model (:mod:`tiremodal_cli.model`, with the
+#: effects of :mod:`tiremodal_cli.effects`); "ring" — the independent finite-element tyre
+#: (:mod:`tiremodal_cli.ring`), which shares nothing with them but this acquisition path.
+MODELS = ("paper", "ring")
+
+#: The ring model's modal damping ratios when ``damping`` is not given: structural modes
+#: 2 % (the middle of Table A1's 1.6–3.8 %), modes of the air cavity 0.5 % (a closed air
+#: cavity is lightly damped, 0.5–1 % in tyre measurements).
+RING_DAMPING = {"structural": 0.02, "cavity": 0.005}
 
 
 @dataclass(frozen=True)
@@ -83,6 +94,8 @@ class SimulationConfig:
     faults: Faults = Faults()
     dtype: str = "float32"
     seed: int = 0
+    model: str = "paper"
+    ring: RingParameters = RingParameters()
 
     def check(self) -> None:
         def need(cond, msg):
@@ -98,6 +111,10 @@ class SimulationConfig:
         need(self.noise >= 0, f"noise={self.noise} must be ≥ 0")
         need(self.damping is None or 0 < self.damping < 1, f"damping={self.damping} must be in (0, 1)")
         need(self.dtype in ("float32", "float64"), f"dtype={self.dtype!r}; allowed: float32, float64")
+        need(self.model in MODELS, f"model={self.model!r}; allowed: {', '.join(MODELS)}")
+        need(self.model == "paper" or not self.effects,
+             "effects belong to the paper model; the ring model takes its physics from its own "
+             "parameters ([ring] table, docs/simulate.md)")
         need(len(self.channels) >= 1 and any(c.location == "tread" for c in self.channels),
              "at least one tread channel is needed")
         names = [c.name for c in self.channels]
@@ -114,6 +131,7 @@ class SimulationConfig:
     def to_dict(self) -> dict:
         d = dataclasses.asdict(self)
         d["params"] = self.params.to_dict()
+        d["ring"] = self.ring.to_dict()
         return d
 
 
@@ -124,7 +142,7 @@ class Simulation:
     Attributes
     ----------
     measurement : Measurement
-    modes : ModalModel
+    modes : ModalModel or RingModes   (the generator's modes: config ``model``)
     damping_ratio : (n_modes,) ndarray
     freq_hz : (n_freq,) ndarray        the records' DFT grid, Hz
     frf : (n_channels, n_points, n_freq) complex ndarray
@@ -134,7 +152,7 @@ class Simulation:
     """
 
     measurement: Measurement
-    modes: ModalModel
+    modes: ModalModel | RingModes
     damping_ratio: np.ndarray
     freq_hz: np.ndarray
     frf: np.ndarray
@@ -185,15 +203,90 @@ def simulate(cfg: SimulationConfig, *, progress=None) -> Simulation:
     rng = np.random.default_rng(cfg.seed)
     fs, ns = cfg.sample_rate, cfg.n_samples
     freq = np.fft.rfftfreq(ns, 1 / fs)
-    modes = solve_modes(cfg.params, n_max=cfg.n_max, effects=cfg.effects)
-    zeta = np.array([cfg.damping if cfg.damping is not None else paper_damping(int(n), b)
-                     for n, b in zip(modes.n, modes.branch)])
     all_angles = 2 * np.pi * np.arange(cfg.n_points) / cfg.n_points
     keep = [i for i in range(cfg.n_points) if i != cfg.faults.missing_point]
     angles = all_angles[keep]
     locs = [c.location for c in cfg.channels]
     c_ang = np.array([c.angle_rad for c in cfg.channels])
-    H = frf(modes, freq, zeta, locs, c_ang, angles, form="accelerance")  # (n_ch, n_p, n_f)
+    if cfg.model == "ring":
+        modes, zeta, H, listed = _ring_source(cfg, freq, angles)
+        p0 = cfg.ring.P0
+    else:
+        modes, zeta, H, listed = _paper_source(cfg, freq, angles)
+        p0 = cfg.params.P0
+    force, resp, hits = _acquire(cfg, H, freq, keep, rng, progress)
+    names = [c.name for c in cfg.channels]
+    meas = Measurement(
+        force=force.astype(cfg.dtype), response=resp.astype(cfg.dtype), sample_rate=float(fs),
+        point_angle=angles, channel_name=tuple(names), channel_location=tuple(locs),
+        channel_angle=c_ang, inflation_pressure=p0,
+        tire="simulated tyre (tiremodal simulate)" if cfg.model == "paper"
+        else "simulated tyre (tiremodal simulate --model ring)",
+        description=f"tiremodal {__version__} simulate, model {cfg.model}, seed {cfg.seed}")
+    truth = _truth(cfg, listed, angles, keep, hits, modes)
+    return Simulation(meas, modes, zeta, freq, H, truth)
+
+
+def _paper_source(cfg, freq, angles):
+    """Modes, damping, accelerances (n_ch, n_p, n_f) and truth list of the paper's model."""
+    modes = solve_modes(cfg.params, n_max=cfg.n_max, effects=cfg.effects)
+    zeta = np.array([cfg.damping if cfg.damping is not None else paper_damping(int(n), b)
+                     for n, b in zip(modes.n, modes.branch)])
+    locs = [c.location for c in cfg.channels]
+    c_ang = np.array([c.angle_rad for c in cfg.channels])
+    H = frf(modes, freq, zeta, locs, c_ang, angles, form="accelerance")
+    from .model import observation
+    listed = []
+    for r in np.flatnonzero(modes.freq_hz < 0.5 * cfg.sample_rate):
+        shape = {}
+        for c in cfg.channels:
+            obs = np.array([observation(modes.dofs, c.location, a) for a in angles])
+            shape[c.name] = (obs @ modes.shapes[r]).tolist()
+        listed.append({"frequency_hz": float(modes.freq_hz[r]), "damping_ratio": float(zeta[r]),
+                       "n": int(modes.n[r]), "harmonic": modes.harmonic[r],
+                       "branch": modes.branch[r], "shape_at_points": shape})
+    return modes, zeta, H, listed
+
+
+def _ring_source(cfg, freq, angles):
+    """Modes, damping, accelerances and truth list of the finite-element ring.
+
+    Modes are computed to 1.25 × the Nyquist frequency (the modal sum's truncation then
+    leaves out only modes well above the band) on a mesh fine enough for every order of the
+    tread below that frequency (:func:`tiremodal_cli.ring.elements_for`).
+    """
+    f_top = 1.25 * 0.5 * cfg.sample_rate
+    rp = cfg.ring.replace(n_elements=max(cfg.ring.n_elements, elements_for(cfg.ring, f_top)))
+    modes = ring_modes(rp, f_max_hz=f_top)
+    if cfg.damping is not None:
+        zeta = np.full(modes.freq_hz.size, cfg.damping)
+    else:
+        zeta = np.array([RING_DAMPING["cavity" if b == "cavity" else "structural"] for b in modes.branch])
+    locs = [c.location for c in cfg.channels]
+    c_ang = np.array([c.angle_rad for c in cfg.channels])
+    H = ring_frf(modes, freq, zeta, locs, c_ang, angles, form="accelerance")
+    listed = []
+    for r in np.flatnonzero(modes.freq_hz < 0.5 * cfg.sample_rate):
+        shape = {}
+        for c in cfg.channels:
+            obs = np.array([ring_observation(modes, c.location, a) for a in angles])
+            shape[c.name] = (obs @ modes.shapes[r]).tolist()
+        listed.append({"frequency_hz": float(modes.freq_hz[r]), "damping_ratio": float(zeta[r]),
+                       "n": int(modes.n[r]), "harmonic": modes.harmonic[r], "branch": modes.branch[r],
+                       "n_purity": float(modes.n_purity[r]),
+                       "energy": dict(zip(("tread_radial", "tread_tangential", "sidewall", "rim", "cavity"),
+                                          map(float, modes.energy[r]))),
+                       "shape_at_points": shape})
+    return modes, zeta, H, listed
+
+
+def _acquire(cfg, H, freq, keep, rng, progress):
+    """Hammer pulses, responses through the accelerances H (n_ch, n_p, n_f), anti-alias
+    filter, noise and faults: the acquisition both generators share.
+
+    Returns force (n_p, n_h, n_s), response (n_p, n_h, n_ch, n_s) and the hits' records.
+    """
+    fs, ns = cfg.sample_rate, cfg.n_samples
     aa = _anti_alias(freq, fs) if cfg.anti_alias else np.ones_like(freq)
     n_p, n_h, n_c = len(keep), cfg.n_hits, len(cfg.channels)
     force = np.zeros((n_p, n_h, ns))
@@ -242,28 +335,10 @@ def simulate(cfg: SimulationConfig, *, progress=None) -> Simulation:
                 force[ip, h] = _clip(force[ip, h], 0.3)
             else:
                 resp[ip, h, names.index(c)] = _clip(resp[ip, h, names.index(c)])
-    meas = Measurement(
-        force=force.astype(cfg.dtype), response=resp.astype(cfg.dtype), sample_rate=float(fs),
-        point_angle=angles, channel_name=tuple(names), channel_location=tuple(locs),
-        channel_angle=c_ang, inflation_pressure=cfg.params.P0,
-        tire="simulated tyre (tiremodal simulate)",
-        description=f"tiremodal {__version__} simulate, seed {cfg.seed}")
-    truth = _truth(cfg, modes, zeta, angles, keep, hits)
-    return Simulation(meas, modes, zeta, freq, H, truth)
+    return force, resp, hits
 
 
-def _truth(cfg, modes: ModalModel, zeta, angles, keep, hits) -> dict:
-    nyq = 0.5 * cfg.sample_rate
-    listed = []
-    for r in np.flatnonzero(modes.freq_hz < nyq):
-        shape = {}
-        for c in cfg.channels:
-            from .model import observation
-            obs = np.array([observation(modes.dofs, c.location, a) for a in angles])
-            shape[c.name] = (obs @ modes.shapes[r]).tolist()
-        listed.append({"frequency_hz": float(modes.freq_hz[r]), "damping_ratio": float(zeta[r]),
-                       "n": int(modes.n[r]), "harmonic": modes.harmonic[r],
-                       "branch": modes.branch[r], "shape_at_points": shape})
+def _truth(cfg, listed, angles, keep, hits, modes) -> dict:
     faults = []
     for hit in hits:
         if "double_hit" in hit:
@@ -276,8 +351,11 @@ def _truth(cfg, modes: ModalModel, zeta, angles, keep, hits) -> dict:
         faults.append({"kind": "missing_point", "point": cfg.faults.missing_point})
     return {
         "format": "tiremodal.truth", "format_version": 1, "tiremodal_version": __version__,
-        "config": cfg.to_dict(), "parameters": cfg.params.to_dict(),
+        "config": cfg.to_dict(),
+        **({"parameters": cfg.params.to_dict()} if cfg.model == "paper" else {"ring_parameters": modes.params.to_dict()}),
         "effects": {k: dict(v or {}) for k, v in cfg.effects.items()},
+        "model": cfg.model,
+        **({"ring_mesh_elements": int(modes.params.n_elements)} if cfg.model == "ring" else {}),
         "point_index_in_file": {str(p): i for i, p in enumerate(keep)},
         "point_angle_rad": [float(a) for a in angles],
         "modes": listed, "faults": faults, "hits": hits,
