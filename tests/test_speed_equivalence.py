@@ -6,8 +6,11 @@ issue 19; sample_modes.csv is the modal table `tiremodal run` found on the bundl
 then (kept so that this check does not move with the lsce stage). Here the present code
 must adopt the same effects and land every fitted parameter within its standard error
 of the recorded value (0.1 SE: the change is in how the model is evaluated, not in what
-is fitted), on both tables, for identify and diagnose. Also the stacked solver against
-the per-order one with a different parameter set in every row of the stack.
+is fitted), on both tables, for identify and diagnose. The recorded diagnosis ran the full
+evolutionary search for every refit; the present one searches locally from the current
+fit with a short global safeguard (``search="local"``), so this is also the check that
+the local search lands on the full search's optimum. Also the stacked solvers against the
+per-set ones with a different parameter set in every row of the stack.
 """
 
 import csv

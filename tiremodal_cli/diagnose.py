@@ -59,6 +59,9 @@ class DiagnoseOptions:
     max_effects : effects adopted on top of one another at most
     candidates : names of the candidates to try (default: every effect and parameter)
     seed, population, generations, tol : the evolutionary search of every fit
+    search : "local" (default): the base fit by the evolutionary search, every refit on
+        top of a fitted model by least squares from it, safeguarded by a short evolutionary search
+        (:class:`tiremodal_cli.identify.FitOptions`); "global": the full search every time
     speed_of_sound : m/s, for the cavity band c / (2π r_c)
     cavity_radius : (lo, hi) fractions of the tread radius R the cavity's mean radius
         may take (default 0.4 … 1.0)
@@ -76,6 +79,7 @@ class DiagnoseOptions:
     tol: float = 1e-6
     speed_of_sound: float = 343.0
     cavity_radius: tuple[float, float] = (0.4, 1.0)
+    search: str = "local"
 
     def check(self, base: TyreParameters) -> None:
         if not 0 < self.noise_floor_pct < 100:
@@ -273,8 +277,12 @@ def _start(current: FitResult) -> dict:
 
 
 def _fit_opts(opt: DiagnoseOptions, **kw) -> FitOptions:
+    # refits from the current model (a start) search locally with a short global safeguard
+    # unless the options ask for the full search every time
+    search = opt.search if kw.get("start") else "global"
     return FitOptions(free=kw.pop("free", opt.free), seed=opt.seed, population=opt.population, weights="uncertainty",
-                      generations=opt.generations, tol=opt.tol, error_floor=opt.noise_floor_pct / 100, **kw)
+                      generations=opt.generations, tol=opt.tol, error_floor=opt.noise_floor_pct / 100,
+                      search=search, **kw)
 
 
 def _effect_spec(name, fixed_effects):

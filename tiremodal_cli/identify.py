@@ -72,6 +72,9 @@ class FitOptions:
         ``tol``); the default runs every generation, ``diagnose`` stops earlier
     start : {name: value} a known good point put into the initial population (DE's
         ``x0``; names as in ``free``/``"effect.param"``, missing ones at mid-range)
+    search : "global" (differential evolution, then least squares) or "local" (with a
+        ``start``: least squares from it, safeguarded by ``safeguard`` generations of the
+        evolutionary search; the refits of ``diagnose``)
     """
 
     free: tuple[str, ...] = ("k_r1", "k_r2", "EI")
@@ -87,6 +90,8 @@ class FitOptions:
     error_floor: float = 1e-3
     tol: float = 1e-10
     start: dict = field(default_factory=dict)
+    search: str = "global"
+    safeguard: int = 15
 
 
 @dataclass(frozen=True)
@@ -322,6 +327,8 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
     names, logb = _split_free(opt)
     if len(modes) < len(names):
         raise DataFormatError(f"{len(modes)} usable modes for {len(names)} free parameters; need at least as many")
+    if opt.search not in ("global", "local"):
+        raise ParameterError(f"search={opt.search!r}; allowed: global, local")
     if opt.weights not in ("relative", "uncertainty"):
         raise ParameterError(f"weights={opt.weights!r}; allowed: relative, uncertainty")
     if "m_w" in opt.free and base.m_w is None:
@@ -369,19 +376,23 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
         mid = logb.mean(axis=1)
         x0 = np.array([np.log(opt.start[n]) if opt.start.get(n, 0) > 0 else mid[i] for i, n in enumerate(names)])
         x0 = np.clip(x0, logb[:, 0] + 1e-9, logb[:, 1] - 1e-9)
-    de = scipy.optimize.differential_evolution(
-        objective_batch, bounds=list(map(tuple, logb)), popsize=max(1, math.ceil(opt.population / k)),
-        maxiter=opt.generations, recombination=opt.crossover,
-        mutation=tuple(opt.mutation) if isinstance(opt.mutation, (tuple, list)) else opt.mutation, seed=opt.seed, tol=opt.tol,
-        atol=0, polish=False, updating="deferred", vectorized=True, callback=callback, init="latinhypercube",
-        x0=x0)
+    jac = lambda x: _jacobian(residuals_batch, x)  # noqa: E731
     # the Jacobian by central differences, its 2k points in one array call; the polish stops
     # when a step moves the log parameters by < 1e-10 relative or the cost by < 1e-10: six
     # orders below the smallest standard error a 0.1 % frequency uncertainty allows (at
     # 1e-14 it crawled on for ~30 iterations of no consequence: 85 % of the polish's calls)
-    ls = scipy.optimize.least_squares(residuals, de.x, jac=lambda x: _jacobian(residuals_batch, x),
-                                      bounds=(logb[:, 0], logb[:, 1]), x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10)
-    x = ls.x if objective(ls.x) <= de.fun else de.x
+    lsq = dict(jac=jac, bounds=(logb[:, 0], logb[:, 1]), x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10)
+    if opt.search == "local" and x0 is not None:
+        x = _local_search(objective_batch, residuals, x0, logb, opt, lsq, history)
+    else:
+        de = scipy.optimize.differential_evolution(
+            objective_batch, bounds=list(map(tuple, logb)), popsize=max(1, math.ceil(opt.population / k)),
+            maxiter=opt.generations, recombination=opt.crossover,
+            mutation=tuple(opt.mutation) if isinstance(opt.mutation, (tuple, list)) else opt.mutation, seed=opt.seed,
+            tol=opt.tol, atol=0, polish=False, updating="deferred", vectorized=True, callback=callback,
+            init="latinhypercube", x0=x0)
+        ls = scipy.optimize.least_squares(residuals, de.x, **lsq)
+        x = ls.x if objective(ls.x) <= de.fun else de.x
     history.append((len(history) + 1, objective(x)))
     J = _jacobian(residuals_batch, x)
     r = residuals(x)
@@ -416,6 +427,36 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
                      undetermined=undetermined, modes=table, rms_error_pct=float(np.sqrt(np.mean(err**2))),
                      max_error_pct=float(np.max(np.abs(err))), history=history, jacobian=J, covariance_log=cov,
                      options=opt)
+
+
+def _local_search(objective_batch, residuals, x0, logb, opt: FitOptions, lsq: dict, history: list) -> np.ndarray:
+    """A least-squares search from a warm start, safeguarded by a short global search.
+
+    From ``x0`` (the current fit, a candidate's own parameters at their defaults) least
+    squares to the end; then ``safeguard`` generations of the same differential evolution
+    as the full search (same population, seeded), its population spread over the bounds
+    with the local optimum in it; where it finds a point below that optimum, least squares
+    from there too, and the better end point wins. Used by ``diagnose`` for the refits on
+    top of a fitted model (``search="local"``); tests/test_speed_equivalence.py checks it
+    lands on the full search's optimum.
+    """
+    ls = scipy.optimize.least_squares(residuals, x0, **lsq)
+    best, best_f = ls.x, float(objective_batch(ls.x[:, None])[0])
+    history.append((len(history) + 1, best_f))
+    k = x0.size
+    de = scipy.optimize.differential_evolution(
+        objective_batch, bounds=list(map(tuple, logb)), popsize=max(1, math.ceil(opt.population / k)),
+        maxiter=opt.safeguard, recombination=opt.crossover,
+        mutation=tuple(opt.mutation) if isinstance(opt.mutation, (tuple, list)) else opt.mutation, seed=opt.seed,
+        tol=0, atol=0, polish=False, updating="deferred", vectorized=True, init="latinhypercube",
+        x0=np.clip(best, logb[:, 0] + 1e-9, logb[:, 1] - 1e-9))
+    if de.fun < best_f * (1 - 1e-6):  # another, lower basin: search it to its bottom
+        ls = scipy.optimize.least_squares(residuals, de.x, **lsq)
+        f_s = float(objective_batch(ls.x[:, None])[0])
+        history.append((len(history) + 1, f_s))
+        if f_s < best_f:
+            best, best_f = ls.x, f_s
+    return best
 
 
 def _jacobian(fun_batch, x, h=1e-6):
