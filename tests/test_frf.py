@@ -157,12 +157,15 @@ def test_cli_frf_file_uff_plot(tmp_path, noisy_sim):
         assert len(h.attrs["input_sha256"]) == 64
     assert meas.read_bytes() == before
     sets = pyuff.UFF(str(uff)).read_sets()
-    assert len(sets) == 3 * 12
+    assert len(sets) == 2 * 3 * 12  # an FRF and its coherence for every channel and point
+    assert sorted({s["func_type"] for s in sets}) == [4, 9]
     for s in sets:
         ic, ip = s["rsp_node"] - 1, s["ref_node"] - 101
-        assert s["func_type"] == 4
         assert_allclose(s["x"], r.freq_hz, rtol=1e-5, atol=1e-6)
-        assert_allclose(s["data"], r.H[ic, ip], rtol=1e-9, atol=1e-9 * np.abs(r.H[ic, ip]).max())
+        want = r.H[ic, ip] if s["func_type"] == 4 else r.coherence[ic, ip]
+        assert_allclose(s["data"], want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+        assert s["id1"].startswith("tiremodal ") and s["id3"] != "NONE" and s["id4"] == "NONE"
+        assert s["id5"] == f"averages {int(r.n_averages[ip])}"
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
 
 
@@ -222,3 +225,21 @@ def test_forms_are_consistent(exact_sim):
     w = 2 * np.pi * mob.freq_hz
     assert_allclose(mob.H * 1j * w, acc.H[..., 1:], rtol=1e-12)
     assert_allclose(rec.H * -(w**2), acc.H[..., 1:], rtol=1e-12)
+
+
+def test_uff_export_names_a_dead_channel(tmp_path, exact_sim, caplog):
+    """A dead channel is left out of the UFF export, with a warning naming it."""
+    import dataclasses
+    import logging
+
+    from tiremodal_cli.frf import FRFOptions, compute_frf
+    from tiremodal_cli.frffile import write_frf_uff
+
+    r = compute_frf(exact_sim.measurement, FRFOptions(band_hz=(0.0, 300.0)))
+    r = dataclasses.replace(r, dead_channels=("rim",))
+    with caplog.at_level(logging.WARNING):
+        write_frf_uff(tmp_path / "f.uff", r, test_name="tyre A")
+    assert any("'rim'" in m and "dead" in m for m in caplog.messages)
+    sets = pyuff.UFF(str(tmp_path / "f.uff")).read_sets()
+    assert {s["rsp_ent_name"].strip() for s in sets} == {"tread", "sidewall"}
+    assert all(s["id4"] == "tyre A" for s in sets)

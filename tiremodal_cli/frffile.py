@@ -104,32 +104,52 @@ def _s(v):
     return v.decode() if isinstance(v, bytes) else str(v)
 
 
-def write_frf_uff(path, r: FRFResult, *, point_node0: int = 101, overwrite: bool = False) -> Path:
-    """Write the FRFs as UFF dataset 58 (function type 4, FRF), ASCII, through pyuff.
+def write_frf_uff(path, r: FRFResult, *, point_node0: int = 101, test_name: str = "",
+                  overwrite: bool = False) -> Path:
+    """Write the FRFs and their coherences as UFF datasets 58, ASCII, through pyuff.
 
-    Response nodes are the channels ``1 … n_channels``, reference nodes the points
-    ``point_node0 + point_index``, direction +Z (3) for both. Dead channels are left out.
+    For every live channel and point: an FRF (function type 4, ordinate in the form's
+    unit over N) and its coherence (function type 9, unitless). Response nodes are the
+    channels ``1 … n_channels``, reference nodes the points ``point_node0 + point_index``,
+    direction +Z (3) for both. ID lines: 1 what (tiremodal version, estimator, form),
+    2 which (channel / point), 3 the date written, 4 the test (``test_name``), 5 the
+    number of averages. A dead channel is left out, with a warning naming it (logged).
     """
+    import datetime
+    import logging
+
+    from . import __version__
+
+    date = datetime.datetime.now().strftime("%d-%b-%y %H:%M:%S")
     sets = []
     for ic, name in enumerate(r.channel_name):
         if name in r.dead_channels:
+            logging.getLogger(__name__).warning(
+                "channel %r left out of the UFF export %s: it is dead (its records hold only noise)", name, path)
             continue
         for ip in range(r.point_angle.size):
-            sets.append(pyuff.prepare_58(
-                binary=0, func_type=4, load_case_id=0, rsp_ent_name=name[:10], rsp_node=ic + 1, rsp_dir=3,
+            common = dict(
+                binary=0, load_case_id=0, rsp_ent_name=name[:10], rsp_node=ic + 1, rsp_dir=3,
                 ref_ent_name="hammer", ref_node=point_node0 + int(r.point_index[ip]), ref_dir=3,
                 abscissa_spacing=1, abscissa_min=float(r.freq_hz[0]),
                 abscissa_inc=float(r.freq_hz[1] - r.freq_hz[0]), abscissa_spec_data_type=18,
-                ordinate_spec_data_type=_SPEC[r.form], orddenom_spec_data_type=13,
                 abscissa_len_unit_exp=0, abscissa_force_unit_exp=0, abscissa_temp_unit_exp=0,
                 ordinate_len_unit_exp=0, ordinate_force_unit_exp=0, ordinate_temp_unit_exp=0,
                 orddenom_len_unit_exp=0, orddenom_force_unit_exp=0, orddenom_temp_unit_exp=0,
                 z_axis_spec_data_type=0, z_axis_len_unit_exp=0, z_axis_force_unit_exp=0,
                 z_axis_temp_unit_exp=0, z_axis_value=0.0, abscissa_axis_units_lab="Hz",
+                z_axis_axis_units_lab="NONE", id2=f"{name} / point {int(r.point_index[ip]) + 1}",
+                id3=date, id4=(test_name or "NONE")[:80],
+                id5=f"averages {int(r.n_averages[ip])}",
+                x=r.freq_hz)
+            sets.append(pyuff.prepare_58(
+                func_type=4, ordinate_spec_data_type=_SPEC[r.form], orddenom_spec_data_type=13,
                 ordinate_axis_units_lab=UNITS[r.form].split("/N")[0], orddenom_axis_units_lab="N",
-                z_axis_axis_units_lab="NONE", id1=f"tiremodal {r.estimator} {r.form}",
-                id2=f"{name} / point {int(r.point_index[ip]) + 1}",
-                data=r.H[ic, ip].astype(complex), x=r.freq_hz))
+                id1=f"tiremodal {__version__} {r.estimator} {r.form}", data=r.H[ic, ip].astype(complex), **common))
+            sets.append(pyuff.prepare_58(
+                func_type=9, ordinate_spec_data_type=0, orddenom_spec_data_type=0,
+                ordinate_axis_units_lab="NONE", orddenom_axis_units_lab="NONE",
+                id1=f"tiremodal {__version__} coherence", data=r.coherence[ic, ip].astype(float), **common))
     with atomic_path(path, overwrite=overwrite) as tmp:
         tmp.unlink()
         pyuff.UFF(str(tmp)).write_sets(sets, mode="add")

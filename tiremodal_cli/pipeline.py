@@ -48,6 +48,8 @@ class RunOptions:
     pressure_from_file : the model's inflation pressure P0 is the one the measurement
         records (when it records one), not the nominal parameters' — a campaign over
         pressures is then fitted at each test's own pressure
+    form : FRF form the modal stage works on: "accelerance" (what accelerometers give),
+        "mobility" or "receptance" — the modes should not depend on it
     """
 
     frf_top: float = 0.3125
@@ -58,6 +60,7 @@ class RunOptions:
     max_effects: int = 2
     predict_n: int = 12
     pressure_from_file: bool = True
+    form: str = "accelerance"
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -89,6 +92,8 @@ class RunOptions:
                         raise ValueError(f"{k} must be > 0")
             if "frf_top" in kw and kw["frf_top"] > 0.5:
                 raise ValueError("frf_top must be ≤ 0.5 (a fraction of the sample rate)")
+            if kw.get("form", "accelerance") not in ("accelerance", "mobility", "receptance"):
+                raise ValueError(f"form={kw['form']!r}; allowed: accelerance, mobility, receptance")
             if "pressure_from_file" in kw and not isinstance(kw["pressure_from_file"], bool):
                 raise ValueError("pressure_from_file must be true or false")
             for k in ("seed", "max_effects", "predict_n"):
@@ -135,7 +140,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     with open_measurement(measurement) as m:
         fs = float(m.sample_rate)
         try:
-            r = compute_frf(m, FRFOptions(band_hz=(0.0, opt.frf_top * fs), exp_end=opt.exp_end))
+            r = compute_frf(m, FRFOptions(band_hz=(0.0, opt.frf_top * fs), exp_end=opt.exp_end, form=opt.form))
         except OSError as exc:
             raise DataFormatError(f"{measurement}: cannot read the records ({exc}); the file may be truncated") from None
         meta = {"tire": getattr(m, "tire", None), "inflation_pressure": getattr(m, "inflation_pressure", None),

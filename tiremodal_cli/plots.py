@@ -15,7 +15,8 @@ from .files import atomic_path  # noqa: E402
 
 __all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_shapes", "plot_synthesis",
            "plot_dispersion", "plot_convergence", "plot_sensitivity", "plot_residuals", "plot_campaign_parameters",
-           "plot_campaign_frequencies", "stabilization_figure", "automac_figure", "synthesis_figure", "mode_labels"]
+           "plot_campaign_frequencies", "stabilization_figure", "automac_figure", "synthesis_figure", "mode_labels",
+           "animate_mode", "mode_gif"]
 
 
 def save_figure(fig, path, *, overwrite: bool = False) -> None:
@@ -362,3 +363,76 @@ def synthesis_figure(table, r, *, points=None, n_channels: int = 2):
     S = np.array([table.synthesis[c, p] for c in live for p in points])
     labels = [f"{r.channel_name[c]} / point {p + 1}" for c in live for p in points]
     return plot_synthesis(r.freq_hz[lines], H, S, labels=labels).figure
+
+
+
+def _mode_figure(shapes, k, frames, exaggeration, size_in):
+    """The figure of one moving mode and its frame-drawing function (``draw(i)``)."""
+    fig, ax = plt.subplots(figsize=(size_in, size_in))
+    rings = list(dict.fromkeys(shapes.ring))
+    r_max = float(np.max(np.hypot(shapes.xyz_m[:, 0], shapes.xyz_m[:, 1])))
+    colors = {"tread": "tab:blue", "sidewall": "tab:red", "rim": "0.3"}
+    lines, data = [], []
+    for ring in rings:
+        sel = np.flatnonzero(np.array(shapes.ring) == ring)
+        order = sel[np.argsort(np.mod(shapes.angle_rad[sel], 2 * np.pi))]
+        th = np.mod(shapes.angle_rad[order], 2 * np.pi)
+        rad = np.hypot(shapes.xyz_m[order, 0], shapes.xyz_m[order, 1])
+        th_c, rad_c = np.append(th, th[0]), np.append(rad, rad[0])
+        ax.plot(rad_c * np.cos(th_c), rad_c * np.sin(th_c), color="0.85", lw=0.8)
+        (ln,) = ax.plot([], [], color=colors.get(ring, "k"), lw=1.5, marker=".", ms=3, label=ring)
+        lines.append(ln)
+        data.append((th_c, rad_c, np.append(shapes.radial[k, order], shapes.radial[k, order[0]])))
+    peak = max(np.max(np.abs(d[2])) for d in data) or 1.0
+    scale = exaggeration * r_max / peak
+    lim = 1.25 * r_max
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    ax.set_title(f"{shapes.frequency_hz[k]:.1f} Hz  {shapes.label[k]}", fontsize=8)
+    ax.legend(fontsize=6, loc="lower right", frameon=False)
+    fig.tight_layout(pad=0.2)
+
+    def draw(i):
+        rot = np.exp(2j * np.pi * i / frames)
+        for ln, (th, rad, phi) in zip(lines, data):
+            rr = rad + scale * np.real(phi * rot)
+            ln.set_data(rr * np.cos(th), rr * np.sin(th))
+        return lines
+
+    return fig, draw
+
+
+def animate_mode(shapes, k: int, *, frames: int = 16, exaggeration: float = 0.2, size_in: float = 2.4):
+    """One mode shape moving, for interactive use: the rings of an
+    :class:`tiremodal_cli.export.ShapeSet` in the tyre's plane, each node displaced
+    radially by Re(φ e^{iωt}) over one period (the largest displacement ``exaggeration`` ×
+    the tread radius). Returns a ``matplotlib.animation.FuncAnimation``; for a file or a
+    report use :func:`mode_gif`."""
+    from matplotlib.animation import FuncAnimation
+
+    fig, draw = _mode_figure(shapes, k, frames, exaggeration, size_in)
+    return FuncAnimation(fig, draw, frames=frames, blit=True)
+
+
+def mode_gif(shapes, k: int, *, frames: int = 12, exaggeration: float = 0.2, size_in: float = 2.4,
+             dpi: int = 60, fps: int = 12) -> bytes:
+    """One mode shape moving (as :func:`animate_mode`) as the bytes of a looping GIF
+    (Pillow, an adaptive palette: a few tens of kB a mode at the defaults)."""
+    import io
+
+    from PIL import Image
+
+    fig, draw = _mode_figure(shapes, k, frames, exaggeration, size_in)
+    fig.set_dpi(dpi)
+    images = []
+    for i in range(frames):
+        draw(i)
+        fig.canvas.draw()
+        rgba = np.asarray(fig.canvas.buffer_rgba())
+        images.append(Image.fromarray(rgba[..., :3]).convert("P", palette=Image.Palette.ADAPTIVE, colors=32))
+    plt.close(fig)
+    buf = io.BytesIO()
+    images[0].save(buf, format="GIF", save_all=True, append_images=images[1:], duration=int(1000 / fps), loop=0)
+    return buf.getvalue()

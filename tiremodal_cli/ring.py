@@ -214,11 +214,15 @@ class RingParameters:
                                  f"{', '.join(sorted(names))}")
         out = {}
         for k, v in values.items():
+            if isinstance(v, str) and k not in ("kGA", "rim_mass", "rim_inertia"):
+                v = {"true": True, "false": False}.get(v.strip().lower(), v)  # command-line text
             if k in ("tangential", "cavity", "sidewall_tangential"):
                 if not isinstance(v, bool):
                     raise ParameterError(f"{where}: {k}={v!r} must be true or false")
                 out[k] = v
             elif k == "n_elements":
+                if isinstance(v, str) and v.strip().isdigit():
+                    v = int(v)
                 if isinstance(v, bool) or not isinstance(v, int):
                     raise ParameterError(f"{where}: n_elements={v!r} must be an integer")
                 out[k] = v
@@ -566,8 +570,10 @@ def _condense(K, M):
         return K.toarray(), M.toarray(), None
     Kkk = K[keep][:, keep]
     Kkm = K[keep][:, massless]
-    Kmm = K[massless][:, massless].tocsc()
-    X = scipy.sparse.linalg.splu(Kmm).solve(-(Kkm.T).toarray())  # q_m = X q_k
+    # K_mm (bending and shear of the rotations) is symmetric positive definite and small:
+    # a dense Cholesky solve with many right-hand sides is far faster than a sparse LU's
+    Kmm = K[massless][:, massless].toarray()
+    X = scipy.linalg.cho_solve(scipy.linalg.cho_factor(Kmm), -(Kkm.T).toarray())  # q_m = X q_k
     Kr = Kkk.toarray() + Kkm.toarray() @ X
     Kr = (Kr + Kr.T) / 2
     Mr = M[keep][:, keep].toarray()
@@ -778,7 +784,8 @@ def ring_frf(modes: RingModes, freq_hz, damping_ratio, out_locations, out_angles
     po = C_out @ modes.shapes.T
     pi = C_in @ modes.shapes.T
     den = wr[:, None] ** 2 - w[None, :] ** 2 + 2j * zeta[:, None] * wr[:, None] * w[None, :]
-    H = np.einsum("or,ir,rf->oif", po, pi, 1.0 / den)
+    # Σ_r po_or pi_ir / den_rf as one matrix product (n_out·n_in, n_modes) @ (n_modes, n_freq)
+    H = ((po[:, None, :] * pi[None, :, :]).reshape(-1, wr.size) @ (1.0 / den)).reshape(po.shape[0], pi.shape[0], -1)
     if form == "mobility":
         H = H * (1j * w)
     elif form == "accelerance":

@@ -265,12 +265,12 @@ def _ring_source(cfg, freq, angles):
     locs = [c.location for c in cfg.channels]
     c_ang = np.array([c.angle_rad for c in cfg.channels])
     H = ring_frf(modes, freq, zeta, locs, c_ang, angles, form="accelerance")
+    below = np.flatnonzero(modes.freq_hz < 0.5 * cfg.sample_rate)
+    at_points = {c.name: np.array([ring_observation(modes, c.location, a) for a in angles]) @ modes.shapes[below].T
+                 for c in cfg.channels}  # (n_points, n_listed) per channel
     listed = []
-    for r in np.flatnonzero(modes.freq_hz < 0.5 * cfg.sample_rate):
-        shape = {}
-        for c in cfg.channels:
-            obs = np.array([ring_observation(modes, c.location, a) for a in angles])
-            shape[c.name] = (obs @ modes.shapes[r]).tolist()
+    for k, r in enumerate(below):
+        shape = {name: v[:, k].tolist() for name, v in at_points.items()}
         listed.append({"frequency_hz": float(modes.freq_hz[r]), "damping_ratio": float(zeta[r]),
                        "n": int(modes.n[r]), "harmonic": modes.harmonic[r], "branch": modes.branch[r],
                        "n_purity": float(modes.n_purity[r]),

@@ -17,7 +17,7 @@ from ..errors import TiremodalError
 
 _NO_ARGS = getattr(click.exceptions, "NoArgsIsHelpError", None)  # click ≥ 8.2
 COMMANDS = ("run", "batch", "report", "simulate", "ingest", "info", "frf", "lsce", "mac", "predict", "identify", "diagnose",
-            "sensitivity")
+            "sensitivity", "export")
 #: Each command's one-line help, so that ``tiremodal --help`` lists them without importing
 #: them (tests/test_cli.py checks that each equals its command's own first sentence).
 SHORT_HELP = {
@@ -25,7 +25,7 @@ SHORT_HELP = {
     "batch": "Run frf → lsce → identify → diagnose on every test under ROOTS.",
     "report": "Write report.html (figures embedded; also as PNG and SVG in figures/) for the run folder OUTDIR, "
               "or for every test of the batch folder OUTDIR plus its index.html.",
-    "simulate": "Simulate a roving-hammer test of the tyre model into OUTPUT (HDF5).",
+    "simulate": "Simulate a roving-hammer test of a tyre into OUTPUT (HDF5).",
     "ingest": "Convert SOURCES (UFF 58 files/folders, or one CSV folder) into a measurement file.",
     "info": "Summarise a tiremodal FILE (measurement, FRF or modal file).",
     "frf": "Estimate FRFs of MEASUREMENT into OUTPUT, rejecting bad hits (reported).",
@@ -35,6 +35,7 @@ SHORT_HELP = {
     "identify": "Fit the model to MODES_FILE (a modal file from lsce, or a CSV with frequency_hz, n, branch).",
     "diagnose": "Find what the model fitted to MODES_FILE lacks, add it, and report the error before and after.",
     "sensitivity": "How each parameter moves the frequencies (80/100/120 % study and normalised coefficients).",
+    "export": "Export the mode shapes of SOURCE (a run folder or a modal file) into the folder OUTPUT.",
 }
 
 
@@ -155,4 +156,3 @@ def cli(verbose, quiet):
     """
     level = logging.ERROR if quiet else {0: logging.WARNING, 1: logging.INFO}.get(verbose, logging.DEBUG)
     logging.basicConfig(level=level, format="tiremodal: %(levelname)s: %(message)s", stream=sys.stderr)
-

@@ -15,11 +15,13 @@ from ..files import atomic_path, check_overwrite, write_text_atomic
 from ..ingest.uff import write_uff_time
 from ..measurement import write_measurement
 from ..model import TyreParameters
-from ..simulate import Channel, Faults, SimulationConfig, simulate
+from ..ring import RING_VARIANTS, RingParameters
+from ..simulate import MODELS, Channel, Faults, SimulationConfig, simulate
 from .main import cli
 from .options import Progress, dumps, echo_json, json_option, overwrite_option, parse_key_values
 
-_SCALARS = {f.name for f in dataclasses.fields(SimulationConfig)} - {"params", "effects", "faults", "channels"}
+_TABLES = {"params", "effects", "faults", "channels", "ring"}
+_SCALARS = {f.name for f in dataclasses.fields(SimulationConfig)} - _TABLES - {"model"} | {"model", "variant"}
 
 
 def _pairs(values, n, what):
@@ -51,14 +53,37 @@ def _effects(specs) -> dict:
 
 
 def build_config(config_file, overrides: dict, params: dict, effects: dict, faults: dict) -> SimulationConfig:
-    """Merge a TOML/JSON file with command-line values into a SimulationConfig."""
+    """Merge a TOML/JSON file with command-line values into a SimulationConfig.
+
+    ``--param`` values go to the chosen model's parameters: ``[params]`` for the paper's
+    model, ``[ring]`` for the finite-element ring (whose ``variant`` presets one physical
+    effect, :data:`tiremodal_cli.ring.RING_VARIANTS`, under the explicit values).
+    """
     data = load_mapping(config_file) if config_file else {}
-    unknown = sorted(set(data) - _SCALARS - {"params", "effects", "faults", "channels"})
+    unknown = sorted(set(data) - _SCALARS - _TABLES)
     if unknown:
         raise ParameterError(f"{config_file}: unknown key {unknown[0]!r}; allowed: "
-                             f"{', '.join(sorted(_SCALARS | {'params', 'effects', 'faults', 'channels'}))}")
+                             f"{', '.join(sorted(_SCALARS | _TABLES))}")
     scal = {k: v for k, v in data.items() if k in _SCALARS}
     scal.update({k: v for k, v in overrides.items() if v is not None})
+    model = scal.pop("model", "paper")
+    variant = scal.pop("variant", None)
+    if model not in MODELS:
+        raise ParameterError(f"model={model!r}; allowed: {', '.join(MODELS)}")
+    if variant is not None and model != "ring":
+        raise ParameterError(f"variant={variant!r} is a preset of the ring model; give model = \"ring\"")
+    if variant is not None and variant not in RING_VARIANTS:
+        raise ParameterError(f"variant={variant!r}; allowed: {', '.join(RING_VARIANTS)}")
+    if model == "ring":
+        if data.get("params") or data.get("effects") or effects:
+            raise ParameterError("the ring model takes its parameters from [ring] (and --param), "
+                                 "not [params] or effects")
+        ring = RingParameters.from_mapping({**RING_VARIANTS.get(variant or "none", {}),
+                                            **data.get("ring", {}), **params},
+                                           where=str(config_file or "--param"))
+        params = {}
+    elif data.get("ring"):
+        raise ParameterError(f"{config_file}: a [ring] table needs model = \"ring\"")
     p = TyreParameters.from_mapping({**data.get("params", {}), **params})
     eff = {**data.get("effects", {}), **effects}
     fd = {**data.get("faults", {}), **{k: v for k, v in faults.items() if v}}
@@ -70,7 +95,8 @@ def build_config(config_file, overrides: dict, params: dict, effects: dict, faul
                       for c in data.get("channels", ())) or SimulationConfig().channels
     except (TypeError, ValueError, KeyError) as exc:
         raise ParameterError(f"{config_file}: malformed faults or channels ({exc})") from None
-    return SimulationConfig(params=p, effects=eff, faults=flt, channels=chans, **scal)
+    extra = {"model": model, "ring": ring} if model == "ring" else {}
+    return SimulationConfig(params=p, effects=eff, faults=flt, channels=chans, **extra, **scal)
 
 
 def _toml(mapping: dict) -> str:
@@ -87,6 +113,11 @@ def _toml(mapping: dict) -> str:
 @click.argument("output", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--config", "config_file", type=click.Path(exists=True, dir_okay=False),
               help="TOML/JSON file: scalars, [params], [effects.NAME], [faults], [[channels]].")
+@click.option("--model", type=click.Choice(MODELS),
+              help="Generator: 'paper' (the paper's model and its effects; default) or 'ring' "
+                   "(the independent finite-element tyre, docs/simulate.md).")
+@click.option("--variant", type=click.Choice(list(RING_VARIANTS)),
+              help="Ring model: one physical effect switched on (default none).")
 @click.option("--truth", type=click.Path(dir_okay=False, path_type=Path),
               help="Truth JSON (default: OUTPUT with suffix .truth.json).")
 @click.option("--seed", type=int, help="Random seed (default 0).")
@@ -99,7 +130,8 @@ def _toml(mapping: dict) -> str:
               help="One modal damping ratio for all modes (default: the paper's, 1.6–3.8 %).")
 @click.option("--n-max", type=click.IntRange(1), help="Highest circumferential order (default 30).")
 @click.option("--param", "params", multiple=True, metavar="NAME=VALUE",
-              help="Model parameter, e.g. k_r1=6.7e6 or m_w=clamped (repeatable).")
+              help="Parameter of the chosen model, e.g. k_r1=6.7e6 or m_w=clamped; for the ring "
+                   "e.g. EA=1e8 or tangential=true (repeatable).")
 @click.option("--effect", "effects", multiple=True, metavar="NAME[:P=V,...]",
               help=f"Switch on an extra effect: {', '.join(EFFECTS)} (repeatable).")
 @click.option("--double-hit", multiple=True, metavar="POINT:HIT", help="Inject a double hit.")
@@ -112,15 +144,16 @@ def _toml(mapping: dict) -> str:
               help="Also write the test as UFF 58 time records (one file a point) and mapping.toml there.")
 @overwrite_option
 @json_option
-def simulate_cmd(output, config_file, truth, seed, n_points, n_hits, sample_rate, n_samples, noise,
+def simulate_cmd(output, config_file, model, variant, truth, seed, n_points, n_hits, sample_rate, n_samples, noise,
                  damping, n_max, params, effects, double_hit, clip, dead_channel, missing_point, dtype,
                  compress, uff_dir, overwrite, as_json):
-    """Simulate a roving-hammer test of the tyre model into OUTPUT (HDF5).
+    """Simulate a roving-hammer test of a tyre into OUTPUT (HDF5).
 
-    Writes OUTPUT and a truth JSON beside it: every mode below Nyquist with n, branch,
+    The tyre is the paper's model (default) or, with --model ring, an independent
+    finite-element tyre. Writes OUTPUT and a truth JSON beside it: every mode below Nyquist with n, branch,
     frequency, damping and shape, the parameters, effects and faults injected.
     """
-    overrides = dict(seed=seed, n_points=n_points, n_hits=n_hits, sample_rate=sample_rate,
+    overrides = dict(model=model, variant=variant, seed=seed, n_points=n_points, n_hits=n_hits, sample_rate=sample_rate,
                      n_samples=n_samples, noise=noise, damping=damping, n_max=n_max, dtype=dtype)
     faults = dict(double_hits=_pairs(double_hit, 2, "--double-hit"), clipped=_pairs(clip, 3, "--clip"),
                   dead_channel=dead_channel, missing_point=missing_point)
