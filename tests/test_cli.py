@@ -26,3 +26,28 @@ def test_usage_errors_are_one_line_exit_2(tmp_path):
         assert res.exit_code == 2
         lines = res.stderr.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith("Error: "), lines
+
+
+def test_the_static_command_list_says_what_each_command_says():
+    """``--help`` lists the commands from a table, without importing them: the table must
+    hold each command's own first sentence."""
+    from tiremodal_cli.cli.main import COMMANDS, SHORT_HELP
+
+    assert set(SHORT_HELP) == set(COMMANDS)
+    for name in COMMANDS:
+        assert SHORT_HELP[name] == cli.commands[name].get_short_help_str(limit=10**6), name
+
+
+def test_help_imports_no_command_and_no_scipy():
+    """Start-up stays light: the group's help imports neither a command module nor
+    scipy, h5py or matplotlib (checked in a fresh interpreter)."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom tiremodal_cli.cli.main import cli\n"
+            "try:\n    cli(['--help'])\nexcept SystemExit:\n    pass\n"
+            "heavy = [m for m in sys.modules if m.split('.')[0] in ('scipy', 'h5py', 'matplotlib', 'numpy')"
+            " or m.startswith('tiremodal_cli.cli.') and m.split('.')[-1] not in ('main',)]\n"
+            "print(','.join(sorted(heavy)), file=sys.stderr)\n")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert "Commands:" in res.stdout and res.stderr.strip() == "", res.stderr

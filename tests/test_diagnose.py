@@ -81,7 +81,7 @@ EFFECT_CASES = {  # each changes some modes by more than 1 % (largest change in 
 @pytest.mark.parametrize("name", sorted(EFFECT_CASES))
 def test_undeclared_effect_is_found_and_closes_the_loop(name, no_effect):
     """The injected effect is the one adopted, the error after is at the no-effect test's
-    level (here: within 1.5 × its RMS), k_r1 and k_r2 within 3 %, and the effect's own
+    level (within 1.5 × its RMS, or diagnose's 0.1 % noise floor), k_r1 and k_r2 within 3 %, and the effect's own
     parameter comes back within 10 % (the cavity: its mode within 1 %)."""
     d = diagnose(pipeline_rows({name: EFFECT_CASES[name]}), NOMINAL, n_points=34)
     assert d.adopted == (name,)
@@ -89,7 +89,10 @@ def test_undeclared_effect_is_found_and_closes_the_loop(name, no_effect):
         assert d.base.max_error_pct > 0.5
     else:
         assert d.base.rms_error_pct > 3 * no_effect.base.rms_error_pct
-    assert d.augmented.rms_error_pct < 1.5 * no_effect.base.rms_error_pct
+    # at the noise level after: the no-effect test's (1.5 ×) or diagnose's frequency noise
+    # floor, whichever is larger (crowded same-branch modes, whose order cannot be told, no
+    # longer reach the fit, so the no-effect RMS fell to ≈ 0.017 %, far under the floor)
+    assert d.augmented.rms_error_pct < max(1.5 * no_effect.base.rms_error_pct, DiagnoseOptions().noise_floor_pct)
     got = dict(zip(d.augmented.free, d.augmented.values))
     assert got["k_r1"] == pytest.approx(NOMINAL.k_r1, rel=0.03)
     assert got["k_r2"] == pytest.approx(NOMINAL.k_r2, rel=0.03)

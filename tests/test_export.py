@@ -63,10 +63,11 @@ def test_uff_read_back_by_pyuff_equals_the_modal_table(table, tmp_path):
     write_uff(path, s)
     sets = pyuff.UFF(str(path)).read_sets()
     kinds = [d["type"] for d in sets]
-    assert kinds.count(15) == 1 and kinds.count(82) == 3 and kinds.count(55) == table.n_modes
-    nodes = next(d for d in sets if d["type"] == 15)
-    np.testing.assert_allclose(nodes["x"], s.xyz_m[:, 0], atol=1e-6)
-    np.testing.assert_allclose(nodes["y"], s.xyz_m[:, 1], atol=1e-6)
+    assert kinds.count(15) == kinds.count(2411) == 1 and kinds.count(82) == 3 and kinds.count(55) == table.n_modes
+    for kind in (15, 2411):
+        nodes = next(d for d in sets if d["type"] == kind)
+        np.testing.assert_allclose(nodes["x"], s.xyz_m[:, 0], atol=1e-6)
+        np.testing.assert_allclose(nodes["y"], s.xyz_m[:, 1], atol=1e-6)
     n_p = table.point_angle.size
     tread = table.shapes[:, list(table.channel_location).index("tread"), :]
     for k, d in enumerate(x for x in sets if x["type"] == 55):
@@ -75,7 +76,10 @@ def test_uff_read_back_by_pyuff_equals_the_modal_table(table, tmp_path):
         # UFF 55 stores values as E13.5: equal to the table's residues to that precision
         want = tread[k] / tread[k][np.argmax(np.abs(tread[k]))]
         np.testing.assert_allclose(radial[:n_p], want, atol=2e-5)
-        assert d["eig"] == pytest.approx(complex(table.pole[k]), rel=1e-5)
+        # the eigenvalue carries the table's (window-corrected) frequency and damping
+        lam = complex(d["eig"])
+        assert abs(lam) / (2 * np.pi) == pytest.approx(table.frequency_hz[k], rel=1e-5)
+        assert -lam.real / abs(lam) == pytest.approx(table.damping_ratio[k], rel=1e-4)
     traces = [d for d in sets if d["type"] == 82]
     assert all(t["nodes"][0] == t["nodes"][-1] for t in traces)  # closed rings
 
@@ -136,3 +140,19 @@ def test_export_command(table, tmp_path):
     assert res.exit_code == 2 and "inside the input" in res.output
     assert not (tmp_path / "inside").exists() and modal.read_bytes() == before
     assert not [p for p in tmp_path.iterdir() if ".partial." in p.name]
+
+
+def test_read_back_by_sdynpy(table, tmp_path):
+    """SDynPy (a heavy install: Qt, VTK, PyVista; not in the test extra) reads the nodes
+    (from UFF 2411), the trace lines and every shape with its frequency and damping."""
+    sdpy = pytest.importorskip("sdynpy", reason="SDynPy is not installed (pip install sdynpy)")
+    from sdynpy.fileio import sdynpy_uff
+
+    s = shape_set(table)
+    write_uff(tmp_path / "shapes.uff", s)
+    d = sdynpy_uff.readuff(str(tmp_path / "shapes.uff"))
+    geo = sdpy.Geometry.from_uff(d)
+    shapes = sdpy.ShapeArray.from_uff(d)
+    assert geo.node.size == s.node.size and shapes.size == table.n_modes
+    np.testing.assert_allclose(shapes.frequency, table.frequency_hz, rtol=1e-5)
+    np.testing.assert_allclose(shapes.damping, table.damping_ratio, rtol=1e-4)

@@ -41,11 +41,14 @@ class Classification:
     pair: int | None = None
     splitting_hz: float | None = None
     in_order: bool = True
+    crowd: bool = False
+    n_candidates: tuple = ()
 
     def to_dict(self):
         return {"n": self.n, "n_spatial": self.n_spatial, "n_confidence": self.n_confidence,
                 "n_aliased": self.aliased, "branch": self.branch, "branch_confidence": self.branch_confidence,
-                "pair": self.pair, "splitting_hz": self.splitting_hz, "in_order": self.in_order}
+                "pair": self.pair, "splitting_hz": self.splitting_hz, "in_order": self.in_order,
+                "crowd": self.crowd, "n_candidates": list(self.n_candidates)}
 
 
 def _real(v):
@@ -72,7 +75,8 @@ def order_energy(shape_over_points, angles_rad) -> dict[int, float]:
     return {n: e / tot for n, e in energy.items()} if tot > 0 else energy
 
 
-def classify(freq_hz, shapes, point_angle, channel_location, significance=None) -> list[Classification]:
+def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
+             damping_ratio=None) -> list[Classification]:
     """Classify every mode.
 
     Parameters
@@ -82,6 +86,7 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None) 
     point_angle : (n_points,) array, rad
     channel_location : sequence of str
     significance : (n_modes,) array, optional — only modes ≥ 0.3 move the alias mark
+    damping_ratio : (n_modes,) array, optional — for the crowd test (see :func:`_crowds`)
 
     Returns
     -------
@@ -147,6 +152,8 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None) 
         if len(partners) == 1 and sum(1 for q in range(len(out)) if ns[q] == ns[r]
                                       and out[q][2] == out[partners[0]][2]) == 1:
             out[r][2] = out[partners[0]][2]
+    crowd = _crowds(freq_hz, damping_ratio, ns, [o[0] for o in out], [o[2] for o in out],
+                    [o[1] >= 0.5 and o[3] >= 0.5 for o in out], n_p)
     # split pairs
     res = []
     pair_id = {}
@@ -159,8 +166,54 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None) 
         if len(members) == 2 and abs(freq_hz[members[0]] - freq_hz[members[1]]) < 0.05 * freq_hz[r]:
             pid = min(members)
             split = float(abs(freq_hz[members[0]] - freq_hz[members[1]]))
-        res.append(Classification(n=int(ns[r]), n_spatial=int(out[r][0]), n_confidence=out[r][1],
-                                  aliased=bool(ns[r] != out[r][0]), branch=out[r][2],
-                                  branch_confidence=out[r][3], pair=pid,
-                                  splitting_hz=split, in_order=bool(in_order[r])))
+        cands = crowd[r]
+        res.append(Classification(n=int(ns[r]), n_spatial=int(out[r][0]),
+                                  # a crowd's order cannot be told: its share of the candidates
+                                  n_confidence=out[r][1] / len(cands) if cands else out[r][1],
+                                  aliased=bool(ns[r] != out[r][0] or any(c > n_top for c in cands)),
+                                  branch=out[r][2], branch_confidence=out[r][3], pair=pid,
+                                  splitting_hz=split, in_order=bool(in_order[r]), crowd=bool(cands),
+                                  n_candidates=tuple(cands)))
     return res
+
+
+def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points):
+    """Modes whose order cannot be told: other orders that alias onto the same spatial
+    order (n' ≡ ±n_s mod N) lie, by their branch's dispersion, within one half-power
+    bandwidth 2ζf of the mode.
+
+    The branch's dispersion f(n) is the clear modes' (both confidences ≥ 0.5) frequencies
+    against their orders, interpolated, and beyond the highest measured order continued
+    with the last step's slope (the same-direction branch flattens under the sidewall
+    resonance, where many orders pile up). Candidates run up to 1.5 N. Returns, per mode,
+    the sorted candidate orders (the mode's own included) when it is in a crowd, else ().
+    """
+    k = len(freq_hz)
+    out = [()] * k
+    if damping_ratio is None or k == 0:
+        return out
+    f = np.asarray(freq_hz, dtype=float)
+    z = np.asarray(damping_ratio, dtype=float)
+    n_hi = int(1.5 * n_points)
+    for br in {b for b in branch if b is not None}:
+        pts = sorted({ns[r]: f[r] for r in range(k) if branch[r] == br and clear[r]}.items())
+        if len(pts) < 2:
+            continue
+        nn = np.array([p[0] for p in pts], dtype=float)
+        ff = np.maximum.accumulate(np.array([p[1] for p in pts]))  # f(n) rises along a branch
+        slope = max(0.0, (ff[-1] - ff[-2]) / max(nn[-1] - nn[-2], 1.0))
+
+        def f_of(n):
+            return float(np.interp(n, nn, ff)) if n <= nn[-1] else float(ff[-1] + slope * (n - nn[-1]))
+
+        for r in range(k):
+            if branch[r] != br:
+                continue
+            m = n_spatial[r]
+            alias = {c for j in range(0, n_hi // max(n_points, 1) + 2)
+                     for c in (j * n_points - m, j * n_points + m) if 0 <= c <= n_hi}
+            bw = 2 * z[r] * f[r]
+            near = sorted(c for c in alias if abs(f_of(c) - f[r]) <= bw)
+            if len(near) > 1:
+                out[r] = tuple(int(c) for c in near)
+    return out

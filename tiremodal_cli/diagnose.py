@@ -34,7 +34,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.stats
+import scipy.special
 
 from .effects import EFFECTS, get_effect
 from .errors import DataFormatError, ParameterError
@@ -59,6 +59,9 @@ class DiagnoseOptions:
     max_effects : effects adopted on top of one another at most
     candidates : names of the candidates to try (default: every effect and parameter)
     seed, population, generations, tol : the evolutionary search of every fit
+    search : "local" (default): the base fit by the evolutionary search, every refit on
+        top of a fitted model by least squares from it, safeguarded by a short evolutionary search
+        (:class:`tiremodal_cli.identify.FitOptions`); "global": the full search every time
     speed_of_sound : m/s, for the cavity band c / (2π r_c)
     cavity_radius : (lo, hi) fractions of the tread radius R the cavity's mean radius
         may take (default 0.4 … 1.0)
@@ -76,6 +79,7 @@ class DiagnoseOptions:
     tol: float = 1e-6
     speed_of_sound: float = 343.0
     cavity_radius: tuple[float, float] = (0.4, 1.0)
+    search: str = "local"
 
     def check(self, base: TyreParameters) -> None:
         if not 0 < self.noise_floor_pct < 100:
@@ -173,7 +177,7 @@ def residual_analysis(res: FitResult, modes: list[MeasuredMode], opt: DiagnoseOp
     k = len(res.free)
     dof = max(len(modes) - k, 1)
     chi2 = float(np.sum(z**2))
-    p = float(scipy.stats.chi2.sf(chi2, dof))
+    p = float(scipy.special.chdtrc(dof, chi2))  # χ² survival function (scipy.stats costs 0.4 s to import)
     ns = np.array([m.n for m in modes])
     br = np.array([m.branch for m in modes])
     pattern = {"branches": {}, "outliers": [], "split_pairs": [], "findings": []}
@@ -259,7 +263,7 @@ def _f_test(rss0, k0, rss1, k1, n) -> float:
     if rss1 <= 0:
         return 0.0
     F = max((rss0 - rss1) / dk, 0.0) / (rss1 / dof1)
-    return float(scipy.stats.f.sf(F, dk, dof1))
+    return float(scipy.special.fdtrc(dk, dof1, F))  # F survival function
 
 
 def _start(current: FitResult) -> dict:
@@ -273,8 +277,12 @@ def _start(current: FitResult) -> dict:
 
 
 def _fit_opts(opt: DiagnoseOptions, **kw) -> FitOptions:
+    # refits from the current model (a start) search locally with a short global safeguard
+    # unless the options ask for the full search every time
+    search = opt.search if kw.get("start") else "global"
     return FitOptions(free=kw.pop("free", opt.free), seed=opt.seed, population=opt.population, weights="uncertainty",
-                      generations=opt.generations, tol=opt.tol, error_floor=opt.noise_floor_pct / 100, **kw)
+                      generations=opt.generations, tol=opt.tol, error_floor=opt.noise_floor_pct / 100,
+                      search=search, **kw)
 
 
 def _effect_spec(name, fixed_effects):

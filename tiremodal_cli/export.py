@@ -13,7 +13,7 @@ residues of a roving-hammer test without a driving point at every sensor do not 
 modal mass).
 
 Node numbers: tread 1001…, sidewall 2001…, rim 3001… (+ the point's index in the file);
-trace lines close each ring.
+trace lines close each ring. The nodes are written twice, as UFF 15 and as UFF 2411.
 
 References
 ----------
@@ -56,7 +56,9 @@ class ShapeSet:
     angle_rad : (n_nodes,) ndarray, rad
     xyz_m : (n_nodes, 3) ndarray, m           node coordinates
     frequency_hz, damping_ratio : (n_modes,) ndarray
-    pole : (n_modes,) complex ndarray, rad/s
+    pole : (n_modes,) complex ndarray, rad/s    −ζω + iω√(1 − ζ²) from the table's
+        frequency and damping (the estimator's raw pole still holds the exponential
+        window's added damping, which the table's damping ratio has had removed)
     label : tuple of str                      "n=3 same" etc.
     radial : (n_modes, n_nodes) complex ndarray   radial shape, largest tread value 1
     left_out : tuple of str                   locations not exported, with the reason
@@ -130,7 +132,14 @@ def shape_set(table, *, radii_m: dict | None = None) -> ShapeSet:
     return ShapeSet(node=np.array(node, dtype=int), ring=tuple(ring), angle_rad=np.array(angle),
                     xyz_m=np.array(xyz, dtype=float), frequency_hz=np.asarray(table.frequency_hz, dtype=float),
                     damping_ratio=np.asarray(table.damping_ratio, dtype=float),
-                    pole=np.asarray(table.pole, dtype=complex), label=labels, radial=radial, left_out=tuple(left))
+                    pole=_pole(table.frequency_hz, table.damping_ratio), label=labels, radial=radial,
+                    left_out=tuple(left))
+
+
+def _pole(freq_hz, zeta) -> np.ndarray:
+    w = 2 * np.pi * np.asarray(freq_hz, dtype=float)
+    z = np.asarray(zeta, dtype=float)
+    return -z * w + 1j * w * np.sqrt(1 - z**2)
 
 
 def _label(table, k) -> str:
@@ -140,14 +149,16 @@ def _label(table, k) -> str:
 
 
 def uff_datasets(s: ShapeSet, *, name: str = "tiremodal") -> list[dict]:
-    """UFF 15 (nodes), 82 (one closed trace line per ring) and 55 (one complex shape per
-    mode: analysis type 3, complex eigenvalue, with the pole as eigenvalue) as pyuff
-    dataset dictionaries."""
+    """UFF 15 and 2411 (the nodes, single- and double-precision records: older readers
+    know the first, some newer ones only the second, e.g. SDynPy), 82 (one closed trace
+    line per ring) and 55 (one complex shape per mode: analysis type 3, complex eigenvalue,
+    with the pole as eigenvalue) as pyuff dataset dictionaries."""
     import pyuff
 
-    out = [pyuff.prepare_15(node_nums=s.node.tolist(), def_cs=[0] * s.node.size, disp_cs=[0] * s.node.size,
-                            color=[1] * s.node.size, x=s.xyz_m[:, 0].tolist(), y=s.xyz_m[:, 1].tolist(),
-                            z=s.xyz_m[:, 2].tolist())]
+    nodes = dict(node_nums=s.node.tolist(), def_cs=[0] * s.node.size, disp_cs=[0] * s.node.size,
+                 color=[1] * s.node.size, x=s.xyz_m[:, 0].tolist(), y=s.xyz_m[:, 1].tolist(),
+                 z=s.xyz_m[:, 2].tolist())
+    out = [pyuff.prepare_15(**nodes), pyuff.prepare_2411(**nodes)]
     for t, loc in enumerate(dict.fromkeys(s.ring), 1):
         nodes = s.node[np.array(s.ring) == loc]
         out.append(pyuff.prepare_82(trace_num=t, n_nodes=nodes.size + 1, color=t, id=f"{loc} ring",

@@ -422,8 +422,12 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
         log.warning("point %d (%.1f°): all %d hits rejected; the point is left out", ip + 1,
                     np.rad2deg(m.point_angle[ip]), n_h)
     keep_p = n_avg > 0
-    lines, Hf = convert_form(freq[sel], H[:, keep_p], opt.form)
-    fq, coh = freq[sel][lines], coh[:, keep_p][..., lines]
+    if not keep_p.all():  # (copies of H and coh only when a point is left out: 15 % of the stage)
+        H, coh = H[:, keep_p], coh[:, keep_p]
+    lines, Hf = convert_form(freq[sel], H, opt.form)
+    fq = freq[sel][lines]
+    if not lines.all():
+        coh = coh[..., lines]
     rejections.sort(key=lambda r: (r.point if r.point is not None else -1, r.hit if r.hit is not None else -1))
     meta = {"force_window": {"applied": opt.force_window, "length_s": opt.force_window_s,
                              "taper_s": opt.taper_s, "rule": "pulse extent ×2, ≥ 8 samples, 4-sample cosine tapers"

@@ -72,6 +72,9 @@ class FitOptions:
         ``tol``); the default runs every generation, ``diagnose`` stops earlier
     start : {name: value} a known good point put into the initial population (DE's
         ``x0``; names as in ``free``/``"effect.param"``, missing ones at mid-range)
+    search : "global" (differential evolution, then least squares) or "local" (with a
+        ``start``: least squares from it, safeguarded by ``safeguard`` generations of the
+        evolutionary search; the refits of ``diagnose``)
     """
 
     free: tuple[str, ...] = ("k_r1", "k_r2", "EI")
@@ -87,6 +90,8 @@ class FitOptions:
     error_floor: float = 1e-3
     tol: float = 1e-10
     start: dict = field(default_factory=dict)
+    search: str = "global"
+    safeguard: int = 15
 
 
 @dataclass(frozen=True)
@@ -322,6 +327,8 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
     names, logb = _split_free(opt)
     if len(modes) < len(names):
         raise DataFormatError(f"{len(modes)} usable modes for {len(names)} free parameters; need at least as many")
+    if opt.search not in ("global", "local"):
+        raise ParameterError(f"search={opt.search!r}; allowed: global, local")
     if opt.weights not in ("relative", "uncertainty"):
         raise ParameterError(f"weights={opt.weights!r}; allowed: relative, uncertainty")
     if "m_w" in opt.free and base.m_w is None:
@@ -339,14 +346,22 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
         w = np.ones(len(modes))
     w = w / np.sqrt(np.mean(w**2))
 
-    def residuals(logx):
-        p, eff = _apply(base, opt, names, logx)
-        f = model_frequencies(p, ns, br, eff or None, mem, f_meas)
+    ev = _Evaluator(base, opt, names, ns, br, mem, f_meas)
+
+    def residuals_batch(logX):
+        """(k, S) log parameters → (S, m) weighted relative errors (one array call)."""
+        f = ev.frequencies(logX)
         r = (f - f_meas) / f_meas
         return np.where(np.isfinite(r), r, 10.0) * w
 
+    def residuals(logx):
+        return residuals_batch(np.asarray(logx, dtype=float)[:, None])[0]
+
+    def objective_batch(logX):
+        return np.sqrt(np.mean(residuals_batch(logX) ** 2, axis=1))
+
     def objective(logx):
-        return float(np.sqrt(np.mean(residuals(logx) ** 2)))
+        return float(objective_batch(np.asarray(logx, dtype=float)[:, None])[0])
 
     history = []
 
@@ -361,16 +376,25 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
         mid = logb.mean(axis=1)
         x0 = np.array([np.log(opt.start[n]) if opt.start.get(n, 0) > 0 else mid[i] for i, n in enumerate(names)])
         x0 = np.clip(x0, logb[:, 0] + 1e-9, logb[:, 1] - 1e-9)
-    de = scipy.optimize.differential_evolution(
-        objective, bounds=list(map(tuple, logb)), popsize=max(1, math.ceil(opt.population / k)),
-        maxiter=opt.generations, recombination=opt.crossover,
-        mutation=tuple(opt.mutation) if isinstance(opt.mutation, (tuple, list)) else opt.mutation, seed=opt.seed, tol=opt.tol,
-        atol=0, polish=False, updating="deferred", workers=1, callback=callback, init="latinhypercube", x0=x0)
-    ls = scipy.optimize.least_squares(residuals, de.x, bounds=(logb[:, 0], logb[:, 1]), x_scale=1.0,
-                                      xtol=1e-14, ftol=1e-14, gtol=1e-14)
-    x = ls.x if objective(ls.x) <= de.fun else de.x
+    jac = lambda x: _jacobian(residuals_batch, x)  # noqa: E731
+    # the Jacobian by central differences, its 2k points in one array call; the polish stops
+    # when a step moves the log parameters by < 1e-10 relative or the cost by < 1e-10: six
+    # orders below the smallest standard error a 0.1 % frequency uncertainty allows (at
+    # 1e-14 it crawled on for ~30 iterations of no consequence: 85 % of the polish's calls)
+    lsq = dict(jac=jac, bounds=(logb[:, 0], logb[:, 1]), x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10)
+    if opt.search == "local" and x0 is not None:
+        x = _local_search(objective_batch, residuals, x0, logb, opt, lsq, history)
+    else:
+        de = scipy.optimize.differential_evolution(
+            objective_batch, bounds=list(map(tuple, logb)), popsize=max(1, math.ceil(opt.population / k)),
+            maxiter=opt.generations, recombination=opt.crossover,
+            mutation=tuple(opt.mutation) if isinstance(opt.mutation, (tuple, list)) else opt.mutation, seed=opt.seed,
+            tol=opt.tol, atol=0, polish=False, updating="deferred", vectorized=True, callback=callback,
+            init="latinhypercube", x0=x0)
+        ls = scipy.optimize.least_squares(residuals, de.x, **lsq)
+        x = ls.x if objective(ls.x) <= de.fun else de.x
     history.append((len(history) + 1, objective(x)))
-    J = _jacobian(residuals, x)
+    J = _jacobian(residuals_batch, x)
     r = residuals(x)
     dof = max(len(modes) - k, 1)
     # residual variance, but never below the floor of a measured frequency's uncertainty:
@@ -405,14 +429,112 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
                      options=opt)
 
 
-def _jacobian(fun, x, h=1e-6):
-    f0 = fun(x)
-    J = np.empty((f0.size, x.size))
-    for i in range(x.size):
-        dx = np.zeros_like(x)
-        dx[i] = h
-        J[:, i] = (fun(x + dx) - fun(x - dx)) / (2 * h)
-    return J
+def _local_search(objective_batch, residuals, x0, logb, opt: FitOptions, lsq: dict, history: list) -> np.ndarray:
+    """A least-squares search from a warm start, safeguarded by a short global search.
+
+    From ``x0`` (the current fit, a candidate's own parameters at their defaults) least
+    squares to the end; then ``safeguard`` generations of the same differential evolution
+    as the full search (same population, seeded), its population spread over the bounds
+    with the local optimum in it; where it finds a point below that optimum, least squares
+    from there too, and the better end point wins. Used by ``diagnose`` for the refits on
+    top of a fitted model (``search="local"``); tests/test_speed_equivalence.py checks it
+    lands on the full search's optimum.
+    """
+    ls = scipy.optimize.least_squares(residuals, x0, **lsq)
+    best, best_f = ls.x, float(objective_batch(ls.x[:, None])[0])
+    history.append((len(history) + 1, best_f))
+    k = x0.size
+    de = scipy.optimize.differential_evolution(
+        objective_batch, bounds=list(map(tuple, logb)), popsize=max(1, math.ceil(opt.population / k)),
+        maxiter=opt.safeguard, recombination=opt.crossover,
+        mutation=tuple(opt.mutation) if isinstance(opt.mutation, (tuple, list)) else opt.mutation, seed=opt.seed,
+        tol=0, atol=0, polish=False, updating="deferred", vectorized=True, init="latinhypercube",
+        x0=np.clip(best, logb[:, 0] + 1e-9, logb[:, 1] - 1e-9))
+    if de.fun < best_f * (1 - 1e-6):  # another, lower basin: search it to its bottom
+        ls = scipy.optimize.least_squares(residuals, de.x, **lsq)
+        f_s = float(objective_batch(ls.x[:, None])[0])
+        history.append((len(history) + 1, f_s))
+        if f_s < best_f:
+            best, best_f = ls.x, f_s
+    return best
+
+
+def _jacobian(fun_batch, x, h=1e-6):
+    """Central differences of ``fun_batch`` ((k, S) → (S, m)) at ``x``: all 2k points in one call."""
+    k = x.size
+    X = np.concatenate([x[:, None] + h * np.eye(k), x[:, None] - h * np.eye(k)], axis=1)
+    F = fun_batch(X)
+    return ((F[:k] - F[k:]) / (2 * h)).T
+
+
+class _Evaluator:
+    """Model frequencies of the measured (n, branch) for a whole population of log
+    parameter vectors in one array call (no per-call object rebuilding).
+
+    Built once per fit: which columns are structural parameters, which are effect
+    parameters (clipped to their physical limits, as :func:`_apply` does), the fixed
+    effects resolved once. Block effects and the seed model go through
+    :func:`tiremodal_cli.model.stacked_branch_frequencies`, one lumped mass through
+    :func:`tiremodal_cli.model.stacked_point_mass_pairs`; another coupling effect set by
+    set through :func:`model_frequencies`. ``calls`` and
+    ``evaluations`` count array calls and parameter sets (for the benchmarks).
+    """
+
+    def __init__(self, base, opt, names, ns, br, mem, f_meas):
+        from .effects import resolve_effects
+
+        self.base, self.opt, self.names = base, opt, list(names)
+        self.ns, self.br, self.mem, self.f_meas = ns, br, mem, f_meas
+        self.struct = [(i, nm) for i, nm in enumerate(names) if "." not in nm]
+        self.free_eff = {}
+        for i, nm in enumerate(names):
+            if "." in nm:
+                e, k = nm.split(".", 1)
+                par = {q.name: q for q in get_effect(e).parameters}[k]
+                self.free_eff.setdefault(e, []).append((i, k, par.lower, par.upper))
+        fixed = {k: dict(v) for k, v in opt.effects.items()}
+        for e in self.free_eff:
+            fixed.setdefault(e, {})
+        self.effects = resolve_effects(fixed)  # defaults overlaid, sorted as model_frequencies has them
+        coupling = [e for e, _ in self.effects if e.couple is not None]
+        self.coupling = bool(coupling)
+        self.point_mass = (len(coupling) == 1 and bool(coupling[0].extra.get("point_mass"))
+                           and not np.any(br == "cavity"))
+        self.mem_code = np.array([{"lower": 0, "upper": 1}.get(m, -1) for m in mem])
+        self.col = np.where(br == "opposite", 1, np.where(br == "cavity", 2, 0))
+        self.calls = 0
+        self.evaluations = 0
+
+    def frequencies(self, logX) -> np.ndarray:
+        from .model import ParamStack, stacked_branch_frequencies, stacked_point_mass_pairs
+
+        logX = np.asarray(logX, dtype=float)
+        S = logX.shape[1]
+        self.calls += 1
+        self.evaluations += S
+        if self.coupling and not self.point_mass:  # a general coupling: the assembled problem, set by set
+            out = np.empty((S, self.ns.size))
+            for j in range(S):
+                p, eff = _apply(self.base, self.opt, self.names, logX[:, j])
+                out[j] = model_frequencies(p, self.ns, self.br, eff or None, self.mem, self.f_meas)
+            return out
+        vals = np.exp(logX)
+        P = ParamStack.broadcast(self.base, S, **{nm: vals[i] for i, nm in self.struct})
+        eff = []
+        for e, v in self.effects:
+            v = dict(v)
+            for i, k, lo, hi in self.free_eff.get(e.name, ()):
+                v[k] = np.clip(vals[i], lo, hi)
+            eff.append((e, v))
+        if self.point_mass:  # one lumped mass: the secular equation, as model_frequencies has it
+            (e_pm, v_pm), = [(e, v) for e, v in eff if e.couple is not None]
+            pairs = stacked_point_mass_pairs(max(2, int(self.ns.max())), P, v_pm[e_pm.extra["point_mass"]], eff)
+            pair = pairs[:, self.ns, self.col, :]  # (S, m, 2): lower, upper member
+            nearer = np.where(np.abs(pair[..., 1] - self.f_meas) < np.abs(pair[..., 0] - self.f_meas), 1, 0)
+            pick = np.where(self.mem_code >= 0, self.mem_code, nearer)
+            return np.take_along_axis(pair, pick[..., None], 2)[..., 0]
+        F = stacked_branch_frequencies(self.ns, P, eff)
+        return F[:, np.arange(self.ns.size), self.col]
 
 
 def predict_table(res: FitResult, n_max: int, *, measured=()) -> list[dict]:

@@ -1,7 +1,8 @@
 """The modal file (``tiremodal.modal``, version 1) and its table forms (JSON, CSV).
 
 HDF5: root attributes ``format``, ``format_version``, ``tiremodal_version``, ``input_file``,
-``input_sha256``, ``form``, ``meta`` (JSON: band, options, exponential window),
+``input_sha256``, ``form``, ``meta`` (JSON: band and its reason, options, exponential window,
+``crowds``: modes whose order cannot be told, each with ``n_candidates``),
 ``clusters`` (JSON: every cluster of every group with its decision), ``rejected`` (JSON);
 datasets per mode ``frequency_hz``, ``damping_ratio``, ``pole`` (complex, as estimated,
 rad/s), ``mpc``, ``significance``, ``group``, ``n`` (−1: none), ``n_spatial``,
@@ -39,7 +40,7 @@ FORMAT_VERSION = 1
 STATUS_CODES = {"new": 0, "f": 1, "fd": 2, "fv": 3, "stable": 4}
 COLUMNS = ("mode", "frequency_hz", "damping_ratio", "n", "branch", "n_confidence", "branch_confidence",
            "mpc", "significance", "n_spatial", "n_aliased", "pair", "splitting_hz", "in_order", "group",
-           "frequency_uncertainty_hz")
+           "frequency_uncertainty_hz", "crowd", "n_candidates", "confirmed")
 
 
 @dataclass(frozen=True)
@@ -124,14 +125,22 @@ def to_rows(t: ModalTable) -> list[dict]:
     """One dict per mode (the ``--json`` list; n, branch, pair absent when not a tyre)."""
     rows = []
     unc = frequency_uncertainty(t)
+    crowds = (t.meta or {}).get("crowds") or []
+    n_top = t.point_angle.size // 2
     for i in range(t.n_modes):
+        cands = next((c["n_candidates"] for c in crowds if abs(c["frequency_hz"] - t.frequency_hz[i])
+                      <= 1e-9 * t.frequency_hz[i]), [])
         row = {"mode": i + 1, "frequency_hz": float(t.frequency_hz[i]), "damping_ratio": float(t.damping_ratio[i]),
                "mpc": float(t.mpc[i]), "significance": float(t.significance[i]), "group": int(t.group[i]),
                "frequency_uncertainty_hz": None if not np.isfinite(unc[i]) else float(unc[i])}
+        conf = (t.meta or {}).get("confirmed")
+        if conf is not None and len(conf) == t.n_modes:
+            row["confirmed"] = bool(conf[i])
         if t.n[i] >= 0:
             row.update(n=int(t.n[i]), branch=t.branch[i] or None, n_confidence=float(t.n_confidence[i]),
                        branch_confidence=float(t.branch_confidence[i]), n_spatial=int(t.n_spatial[i]),
-                       n_aliased=bool(t.n[i] != t.n_spatial[i]),
+                       n_aliased=bool(t.n[i] != t.n_spatial[i] or any(c > n_top for c in cands)),
+                       crowd=bool(cands), n_candidates=" ".join(str(c) for c in cands) or None,
                        pair=None if t.pair[i] < 0 else int(t.pair[i]) + 1,
                        splitting_hz=None if not np.isfinite(t.splitting_hz[i]) else float(t.splitting_hz[i]),
                        in_order=bool(t.in_order[i]))

@@ -17,6 +17,8 @@ import time
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
+import numpy as np
+
 from . import __version__
 from .diagnose import DiagnoseOptions, diagnose, report
 from .errors import DataFormatError, ParameterError
@@ -41,9 +43,10 @@ MANIFEST = "run.json"
 class RunOptions:
     """Defaults of every stage (fractions of the sample rate fs where marked).
 
-    frf_top : FRFs up to frf_top × fs (0.3125: inside a front end's anti-alias corner at 0.4 fs)
-    band : lsce band (Hz); default (0.04 fs, 0.293 fs): above the rim and rigid-body region,
-        below the FRF band's top
+    frf_top : FRFs up to frf_top × fs (1/2.56 = 0.390625: an analyser's usable bandwidth under its
+        anti-alias filter; the lsce band then ends where the coherence and force fail)
+    band : lsce band (Hz); default: where the coherence and the force spectrum support the
+        estimate (:func:`tiremodal_cli.modes.default_band`, its reason in the modal file)
     exp_end : exponential window's value at the record's end (its damping is corrected)
     predict_n : predictions (and sensitivities) reach at least this order, and always two
         beyond the highest measured one
@@ -55,7 +58,7 @@ class RunOptions:
         "mobility" or "receptance" — the modes should not depend on it
     """
 
-    frf_top: float = 0.3125
+    frf_top: float = 1 / 2.56
     band: tuple[float, float] | None = None
     exp_end: float | None = 0.05
     seed: int = 0
@@ -151,6 +154,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
             r = compute_frf(m, FRFOptions(band_hz=(0.0, opt.frf_top * fs), exp_end=opt.exp_end, form=opt.form))
         except OSError as exc:
             raise DataFormatError(f"{measurement}: cannot read the records ({exc}); the file may be truncated") from None
+        force_g = _force_autospectrum(m, r.freq_hz)
         meta = {"tire": getattr(m, "tire", None), "inflation_pressure": getattr(m, "inflation_pressure", None),
                 "n_points": int(m.n_points), "n_hits": int(m.n_hits), "sample_rate": fs}
     nominal = params
@@ -160,8 +164,8 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     source = source or {"path": str(measurement), "kind": "measurement", "sha256": sha}
     write_frf(outdir / "frf.h5", r, input_file=str(source["path"]), input_sha256=sha, overwrite=True)
     say("lsce")
-    band = opt.band or (0.04 * fs, 0.293 * fs)
-    table, _ = modal_table_from_frf(r, ModalOptions(band_hz=tuple(band)))
+    table, _ = modal_table_from_frf(r, ModalOptions(band_hz=None if opt.band is None else tuple(opt.band)),
+                                    force_autospectrum=force_g)
     write_modal(outdir / "modal.h5", table, input_file="frf.h5",
                 input_sha256=sha256_file(outdir / "frf.h5"), overwrite=True)
     write_text_atomic(outdir / "modes.csv", to_csv(table), overwrite=True)
@@ -303,13 +307,32 @@ def verify_manifest(folder, man: dict | None = None) -> dict:
     return man
 
 
+def _force_autospectrum(m, freq_hz):
+    """Mean |F|² of every hit's force record on the FRF lines ``freq_hz`` (one point at a
+    time: memory of one point's records)."""
+    fs, ns = float(m.sample_rate), int(m.n_samples)
+    k = np.round(np.asarray(freq_hz) * ns / fs).astype(int)
+    acc = np.zeros(k.size)
+    for ip in range(m.n_points):
+        f = np.asarray(m.force[ip], dtype=float)
+        f = np.where(np.isfinite(f), f, 0.0)
+        acc += np.sum(np.abs(np.fft.rfft(f, axis=-1)[..., k]) ** 2, axis=0)
+    return acc
+
+
 def _sensitivity(res, n_max: int) -> dict:
     """Normalised sensitivities ∂ln f/∂ln p of the final model (its effects included) at its
     identified parameters, for the paper's parameters and n = 1 … n_max."""
     ns, br, S = coefficients(res.parameters, PAPER_STUDY, n_max, res.effects or None)
+    # a coefficient that cannot be computed is an explicit null with its reason, never NaN
+    nulls = [{"n": int(ns[i]), "branch": str(br[i]), "parameter": k,
+              "reason": "not finite at the final model's parameters (no such mode of the model there)"}
+             for i in range(len(ns)) for j, k in enumerate(PAPER_STUDY) if not np.isfinite(S[i, j])]
     return {"parameters": res.parameters.to_dict(), "effects": res.effects, "names": list(PAPER_STUDY),
-            "coefficients": [{"n": int(n), "branch": str(b), **{k: float(S[i, j]) for j, k in enumerate(PAPER_STUDY)}}
-                             for i, (n, b) in enumerate(zip(ns, br))]}
+            "coefficients": [{"n": int(n), "branch": str(b),
+                              **{k: float(S[i, j]) if np.isfinite(S[i, j]) else None for j, k in enumerate(PAPER_STUDY)}}
+                             for i, (n, b) in enumerate(zip(ns, br))],
+            "nulls": nulls}
 
 
 def read_manifest(outdir) -> dict | None:

@@ -163,20 +163,40 @@ def stabilize(band: Band, sweep_result: list[OrderPoles], opt: StabilizationOpti
     return Diagram(poles=poles, clusters=clusters, orders=orders)
 
 
+def _shape_informative(c) -> bool:
+    """True when a cluster's shapes have more than one component: only then can a MAC tell
+    two modes apart (with one reference and one response every MAC is 1)."""
+    return np.size(c.members[0].shape) > 1
+
+
 def _drop_duplicates(clusters, opt):
-    """Of two adopted clusters that are one mode (close in frequency, same shape), keep the
-    one stable at more orders; the other is a noise-fitting twin."""
+    """Of two adopted clusters that are one mode, keep the one stable at more orders.
+
+    Where the shapes can differ (more than one component: several references, or
+    participation vectors), two clusters within ``cluster_freq`` whose MAC is ≥
+    ``cluster_mac`` are one mode. With one-component shapes every MAC is 1 and is no
+    evidence: the poles decide, and two clusters are one mode only when the second lies
+    in the first's half-power band (|Δf| ≤ ζ f of the more persistent one).
+    """
     adopted = sorted((c for c in clusters if c.adopted), key=lambda c: -len(c.members))
     kept = []
     for c in adopted:
-        twin = next((k for k in kept if abs(k.freq_hz - c.freq_hz) <= opt.cluster_freq * c.freq_hz
-                     and mac(k.mean_shape(), c.mean_shape()) >= opt.cluster_mac), None)
+        twin = None
+        for k in kept:
+            if _shape_informative(k):
+                if (abs(k.freq_hz - c.freq_hz) > opt.cluster_freq * c.freq_hz
+                        or mac(k.mean_shape(), c.mean_shape()) < opt.cluster_mac):
+                    continue
+            elif abs(k.freq_hz - c.freq_hz) > k.damping_ratio * k.freq_hz:
+                continue
+            twin = k
+            break
         if twin is None:
             kept.append(c)
         else:
             c.adopted = False
-            c.reason = (f"duplicate of the mode at {twin.freq_hz:.3f} Hz (stable at {len(twin.members)} "
-                        f"orders against {len(c.members)})")
+            c.reason = (f"duplicate of the mode at {twin.freq_hz:.3f} Hz: within its half-power band "
+                        f"(stable at {len(twin.members)} orders against {len(c.members)})")
 
 
 def _cluster(stable, opt):
@@ -187,13 +207,16 @@ def _cluster(stable, opt):
         best, best_mac = None, opt.cluster_mac
         fm = np.asarray(f_mean)
         near = np.flatnonzero(np.abs(fm - p.freq_hz) <= opt.cluster_freq * p.freq_hz) if fm.size else []
+        # the best-matching shape (MAC ≥ cluster_mac); among equal MACs — with one reference
+        # every MAC is 1 — the nearest cluster in frequency
+        best_key = (best_mac - 1e-9, -np.inf)
         for ci in near:
             c = clusters[ci]
             if p.order in c.orders:
                 continue
-            v = mac(means[ci], p.shape)
-            if v >= best_mac:
-                best, best_mac = ci, v
+            key = (round(mac(means[ci], p.shape), 9), -abs(fm[ci] - p.freq_hz))
+            if key > best_key:
+                best, best_key = ci, key
         if best is None:
             clusters.append(Cluster(members=[p]))
             clusters[-1].orders = {p.order}

@@ -347,7 +347,8 @@ def run_case(case: Case, workdir) -> dict:
     rows = _read_modes(workdir / "run" / "modes.csv")
     sc = score_modes(groups, rows, sim.truth["modes"])
     diag = json.loads((workdir / "run" / "diagnosis.json").read_text(encoding="utf-8"))
-    adopted = list(diag.get("adopted_effects", [])) + list(diag.get("parameter_off", []))
+    # an effect adopted and a parameter found off, each once (a parameter can be both)
+    adopted = list(dict.fromkeys(list(diag.get("adopted_effects", [])) + list(diag.get("parameter_off", []))))
     rec.update(status="ok", **sc, base_rms_pct=float(diag["base"]["rms_error_pct"]),
                final_rms_pct=float(diag["augmented"]["rms_error_pct"]), adopted_effects=adopted,
                diagnosis_right=_diagnosis_right(case.physics, adopted),

@@ -29,11 +29,13 @@ def read_any_frf(path: Path, mapping=None):
 @click.argument("frf_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="Modal file to write (HDF5).")
-@band_option("Analysis band, Hz (default: all lines > 0 Hz).")
+@band_option("Analysis band, Hz (default: where the coherence supports the estimate).")
 @click.option("--max-order", type=click.IntRange(2, 400), default=120, show_default=True,
               help="Highest model order of the sweep (per circumferential order: at most 24).")
 @click.option("--spatial", type=click.Choice(["auto", "on", "off"]), default="auto", show_default=True,
               help="Split tyre FRFs into circumferential orders before the sweep.")
+@click.option("--method", type=click.Choice(["lsce", "plscf", "both"]), default="lsce", show_default=True,
+              help="Pole estimator; both: run LSCE and pLSCF, mark the modes they agree on as confirmed.")
 @click.option("--tol-freq", type=FiniteRange(0, 1, min_open=True), default=0.01, show_default=True,
               help="Stability: relative frequency (0 < TOL ≤ 1).")
 @click.option("--tol-damping", type=FiniteRange(0, 1, min_open=True), default=0.05, show_default=True,
@@ -51,7 +53,7 @@ def read_any_frf(path: Path, mapping=None):
 @click.option("--plot-synthesis", type=PlotPath())
 @overwrite_option
 @json_option
-def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, tol_mac, min_significance, mapping,
+def lsce_cmd(frf_file, output, band, max_order, spatial, method, tol_freq, tol_damping, tol_mac, min_significance, mapping,
              csv_out, plot_stabilization, plot_mac, plot_shapes, plot_synthesis, overwrite, as_json):
     """Estimate modes of FRF_FILE (FRF HDF5 or UFF 58 FRFs) into OUTPUT.
 
@@ -66,7 +68,7 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, 
         if o is not None:
             check_overwrite(o, overwrite)
     r = read_any_frf(frf_file, mapping)
-    opt = ModalOptions(band_hz=tuple(band) if band else None, max_order=max_order, spatial=spatial,
+    opt = ModalOptions(band_hz=tuple(band) if band else None, max_order=max_order, spatial=spatial, method=method,
                        min_significance=min_significance,
                        stabilization=StabilizationOptions(tol_freq=tol_freq, tol_damping=tol_damping, tol_mac=tol_mac))
     bar = Progress("lsce")
@@ -81,7 +83,8 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, 
     rows = to_rows(table)
     if as_json:
         echo_json({"modes": rows, "clusters": table.clusters, "rejected_modes": table.rejected,
-                   "band_hz": table.meta["band_hz"], "spatial": table.meta["spatial"],
+                   "band_hz": table.meta["band_hz"], "band_reason": table.meta.get("band_reason"),
+                   "spatial": table.meta["spatial"], "crowds": table.meta.get("crowds", []),
                    "exp_tau_s": table.meta["exp_tau_s"],
                    "fit_error_median": float(np.nanmedian(table.fit_error)), "output": str(output)})
     else:
@@ -90,7 +93,8 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, tol_freq, tol_damping, 
         for row in rows:
             click.echo(f"{row['mode']:4d} {row['frequency_hz']:9.3f} {100 * row['damping_ratio']:8.3f} "
                        f"{row['mpc']:5.2f} {row.get('n', ''):>3} {row.get('branch') or '':>8} "
-                       f"{row.get('n_confidence', float('nan')):5.2f}")
+                       + (f"{row['n_confidence']:5.2f}" if 'n_confidence' in row else f"{'':>5}")
+                       + (f"  crowd: n in {row['n_candidates']}" if row.get('crowd') else ""))
 
 
 def _plots(table, r, stab, macp, shapes, synth, overwrite):

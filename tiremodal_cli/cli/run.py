@@ -26,7 +26,7 @@ def _stage_message(stage: str) -> None:
 @click.option("-o", "--output", "outdir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Folder for every stage's output.")
 @params_options
-@band_option("lsce band, Hz (default 0.04 fs … 0.293 fs; at most 0.3125 fs, the FRFs' top).")
+@band_option("lsce band, Hz (default: from the coherence and force spectrum).")
 @click.option("--exp-end", type=FiniteRange(0, 1, min_open=True, max_open=True), default=0.05,
               show_default=True, help="Exponential window's value at the record's end (corrected in lsce).")
 @click.option("--no-exp-window", is_flag=True, help="No exponential window.")

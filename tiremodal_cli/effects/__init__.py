@@ -11,9 +11,12 @@ An effect acts through one or more of three hooks:
     Change the per-length block of circumferential order ``n`` (mass, stiffness,
     degrees of freedom). ``freq_hz`` is given for frequency-dependent effects. The hook
     must also take a stack: ``n`` a (k,) int array, ``block.M``/``block.K`` (k, d, d)
-    arrays and ``freq_hz`` None or a (k,) array (index with ``K[..., i, j]``); a block
-    of n = 1 always comes alone, so an effect that adds a degree of freedom there
-    (the air cavity) leaves stacks of other orders as they are.
+    arrays and ``freq_hz`` None or a (k,) array (index with ``K[..., i, j]``), and then
+    the fields of ``p`` and the ``values`` may be (k,) arrays too (one parameter set per
+    stacked block: a whole optimiser population evaluated at once, see
+    :class:`tiremodal_cli.model.ParamStack`). Blocks of n = 1 come alone or in a stack
+    of their own, so an effect that adds a degree of freedom there (the air cavity)
+    leaves stacks of other orders as they are.
 ``couple(M, K, dofs, values)``
     Add terms that couple different orders or harmonics (a lumped mass), acting on the
     assembled generalised matrices (kg, N/m).

@@ -27,24 +27,29 @@ MU = 0.05
 
 
 def _modify(n, block: Block, v, p, freq_hz=None) -> Block:
-    if np.ndim(n) > 0:  # a stack of orders: n = 1 always comes alone (the block grows)
-        if np.any(np.asarray(n) == 1):
-            raise ValueError("air_cavity: the n = 1 block must be modified alone")
+    n = np.asarray(n)
+    if n.ndim > 0 and not np.all(n == 1):  # a stack of other orders: unchanged
+        if np.any(n == 1):
+            raise ValueError("air_cavity: the n = 1 blocks must come in a stack of their own")
         return block
-    if n != 1:
+    if n.ndim == 0 and n != 1:
         return block
+    # one n = 1 block ((k, k)) or a stack of them ((N, k, k), one parameter set per row)
     k = len(block.dofs)
-    M = np.zeros((k + 1, k + 1))
-    K = np.zeros((k + 1, k + 1))
-    M[:k, :k] = block.M
-    K[:k, :k] = block.K
+    Mb, Kb = np.asarray(block.M, dtype=float), np.asarray(block.K, dtype=float)
+    M = np.zeros(Mb.shape[:-2] + (k + 1, k + 1))
+    K = np.zeros_like(M)
+    M[..., :k, :k] = Mb
+    K[..., :k, :k] = Kb
     ma = MU * p.rhoA
-    kappa = v["gamma"] * ma * (2 * np.pi * v["f_cavity_hz"]) ** 2
+    w2c = (2 * np.pi * v["f_cavity_hz"]) ** 2
+    kappa = v["gamma"] * ma * w2c
     iu = block.dofs.index("U")
-    M[k, k] = ma
-    K[k, k] = ma * (2 * np.pi * v["f_cavity_hz"]) ** 2
-    K[iu, iu] += kappa
-    K[iu, k] = K[k, iu] = -kappa
+    M[..., k, k] = ma
+    K[..., k, k] = ma * w2c
+    K[..., iu, iu] += kappa
+    K[..., iu, k] = -kappa
+    K[..., k, iu] = -kappa
     return Block(M, K, block.dofs + ("A",))
 
 

@@ -21,7 +21,7 @@ F_REF_HZ = 100.0
 
 
 def _modify(n, block: Block, v, p, freq_hz=None) -> Block:
-    if freq_hz is None or v["beta"] == 0.0:
+    if freq_hz is None or np.all(np.asarray(v["beta"]) == 0.0):  # β may be one per stacked block
         return block
     scale = (np.maximum(freq_hz, 1e-3) / F_REF_HZ) ** v["beta"] - 1.0
     K = np.array(block.K, dtype=float)

@@ -1,0 +1,154 @@
+"""Whole-test benchmark (issue 19): ``run`` per stage, ``diagnose`` on Table A1 and start-up,
+against the implementation before issue 19 in the same run.
+
+Baseline ``before``: the package as it was at commit BASELINE (5c57b5d: one solve_modes per
+DE member and call, scipy.stats, every command imported at start-up), extracted with
+``git archive`` into a temporary folder and imported as ``tiremodal_before`` next to the
+present ``tiremodal_cli``. Both run in this process, interleaved round by round (the
+machine is shared; medians of ``--repeat`` rounds), with the BLAS threads of both limited
+alike (threadpoolctl, one thread: the problems are small).
+
+Prints, for each case, the median wall time of each implementation and their ratio, and
+the model evaluations of each: for ``before`` the calls of model_frequencies (one
+parameter set each); for the present code the array calls and the parameter sets they
+held. Targets: run on the sample ≤ 2 s, diagnose on Table A1 ≤ 1 s, ``--help`` ≤ 0.2 s.
+
+Run: ``python benchmarks/bench_run.py [--repeat 3]`` (needs git and the repository's history).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import importlib
+import io
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+from pathlib import Path
+
+from threadpoolctl import threadpool_limits
+
+ROOT = Path(__file__).resolve().parents[1]
+BASELINE = "5c57b5d"
+SAMPLE = ROOT / "sample_data" / "gl073a_sim.h5"
+TABLE_A1 = ROOT / "sample_data" / "paper_table_a1.csv"
+
+
+def load_before(tmp: Path):
+    """The package at BASELINE as ``tiremodal_before`` (relative imports keep it whole)."""
+    data = subprocess.run(["git", "archive", BASELINE, "tiremodal_cli"], cwd=ROOT, capture_output=True,
+                          check=True).stdout
+    with tarfile.open(fileobj=io.BytesIO(data)) as tar:
+        tar.extractall(tmp, filter="data")
+    (tmp / "tiremodal_cli").rename(tmp / "tiremodal_before")
+    sys.path.insert(0, str(tmp))
+    return importlib.import_module("tiremodal_before")
+
+
+class Counter:
+    """Counts model evaluations of one implementation while a case runs."""
+
+    def __init__(self, pkg, present: bool):
+        self.ident = importlib.import_module(f"{pkg}.identify")
+        self.present = present
+        self.calls = self.sets = 0
+        if present:
+            orig = self.ident._Evaluator.frequencies
+
+            def counted(ev, logX, _orig=orig):
+                self.calls += 1
+                self.sets += logX.shape[1]
+                return _orig(ev, logX)
+            self.ident._Evaluator.frequencies = counted
+        else:
+            orig = self.ident.model_frequencies
+
+            def counted(*a, _orig=orig, **k):
+                self.calls += 1
+                self.sets += 1
+                return _orig(*a, **k)
+            self.ident.model_frequencies = counted
+
+    def reset(self):
+        self.calls = self.sets = 0
+
+    def text(self):
+        return f"{self.sets:,} sets in {self.calls:,} calls" if self.present else f"{self.sets:,} sets"
+
+
+def run_case(pkg, out: Path):
+    pipeline = importlib.import_module(f"{pkg}.pipeline")
+    marks = []
+    t0 = time.perf_counter()
+    pipeline.run(SAMPLE, out, pipeline.RunOptions(), progress=lambda s: marks.append((s, time.perf_counter())))
+    t_end = time.perf_counter()
+    stages = {}
+    for (name, t), nxt in zip(marks, marks[1:] + [("end", t_end)]):
+        stages[name] = nxt[1] - t
+    stages["total"] = t_end - t0
+    return stages
+
+
+def a1_case(pkg):
+    diagnose = importlib.import_module(f"{pkg}.diagnose")
+    model = importlib.import_module(f"{pkg}.model")
+    with TABLE_A1.open() as fh:
+        rows = list(csv.DictReader(fh))
+    t = time.perf_counter()
+    d = diagnose.diagnose(rows, model.TyreParameters())
+    return time.perf_counter() - t, d.adopted
+
+
+def help_time(pkg, tmp):
+    env = dict(os.environ, PYTHONPATH=f"{tmp}{os.pathsep}{ROOT}")
+    code = f"from {pkg}.cli.main import cli; cli(['--help'])"
+    t = time.perf_counter()
+    subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, check=True)
+    return time.perf_counter() - t
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp, threadpool_limits(1):
+        tmp = Path(tmp)
+        load_before(tmp)
+        impls = {"present": "tiremodal_cli", "before": "tiremodal_before"}
+        counters = {k: Counter(p, k == "present") for k, p in impls.items()}
+        times = {k: {"help": [], "a1": []} for k in impls}
+        evals = {}
+        for rnd in range(args.repeat):
+            for k, pkg in (impls.items() if rnd % 2 == 0 else reversed(impls.items())):
+                times[k]["help"].append(help_time(pkg, tmp))
+                counters[k].reset()
+                st = run_case(pkg, tmp / f"out_{k}")
+                evals[(k, "run")] = counters[k].text()
+                for s, v in st.items():
+                    times[k].setdefault(f"run:{s}", []).append(v)
+                counters[k].reset()
+                t, adopted = a1_case(pkg)
+                times[k]["a1"].append(t)
+                evals[(k, "a1")] = counters[k].text() + f"; adopted {', '.join(adopted) or 'none'}"
+                print(f"round {rnd + 1}: {k} run {st['total']:.2f} s, A1 diagnose {t:.2f} s", file=sys.stderr)
+    print(f"# bench_run: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"Python {platform.python_version()}, {args.repeat} interleaved rounds, BLAS 1 thread; medians")
+    print(f"{'case':<22}{'present s':>11}{'before s':>11}{'ratio':>8}")
+    cases = [k for k in times["present"] if k.startswith("run:")] + ["a1", "help"]
+    label = {"a1": "diagnose Table A1", "help": "tiremodal --help"}
+    for c in cases:
+        a, b = statistics.median(times["present"][c]), statistics.median(times["before"][c])
+        print(f"{label.get(c, c):<22}{a:>11.3f}{b:>11.3f}{b / a:>7.1f}x")
+    print("model evaluations:")
+    for (k, c), v in evals.items():
+        print(f"  {k:<8} {'run' if c == 'run' else 'diagnose Table A1':<18} {v}")
+
+
+if __name__ == "__main__":
+    main()
