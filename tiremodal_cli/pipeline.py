@@ -122,6 +122,31 @@ def _json(obj) -> str:
     return dumps(obj)
 
 
+#: Rim (plus hub and fixture) mass assumed when a rim channel shows the rim moving and the
+#: nominal parameters give none, kg. The paper gives none; ``diagnose`` tests m_w as a
+#: parameter that may be off, so this is a starting value, not a result.
+NOMINAL_RIM_KG = 1000.0
+
+
+def rim_condition(r, params: TyreParameters) -> tuple[TyreParameters, str]:
+    """The rim's condition from the data: the model's rim and a sentence saying why.
+
+    A rim channel that recorded no signal (a dead channel of the FRF stage) means a rim
+    clamped to a rigid fixture (m_w → ∞, ``m_w = None``); a rim channel that moves means a
+    free rim, whose mass is the parameters' (or :data:`NOMINAL_RIM_KG`); without a rim
+    channel the parameters decide. (The paper's model couples the rim to n = 1 only.)
+    """
+    rim = [n for n, loc in zip(r.channel_name, r.channel_location) if loc == "rim"]
+    if not rim:
+        how = "clamped" if params.m_w is None else f"free, m_w = {params.m_w:g} kg"
+        return params, f"{how}: from the parameters (the test has no rim channel)"
+    if all(n in r.dead_channels for n in rim):
+        return params.replace(m_w=None), (f"clamped: the rim channel ({', '.join(rim)}) recorded no signal")
+    m_w = params.m_w if params.m_w is not None else NOMINAL_RIM_KG
+    return params.replace(m_w=m_w), (f"free: the rim channel ({', '.join(n for n in rim if n not in r.dead_channels)}) "
+                                     f"moves; rim + fixture mass m_w = {m_w:g} kg to start from")
+
+
 def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyreParameters | None = None,
         progress=None, source: dict | None = None) -> dict:
     """Run the whole pipeline on one measurement file; return the summary.
@@ -131,8 +156,9 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     measurement : path of a measurement file (docs/format.md)
     outdir : folder for the outputs (created; existing outputs are replaced)
     opt : RunOptions
-    params : nominal model parameters (default: the paper's, with a 1,000 kg rim + fixture);
-        P0 is replaced by the measurement's pressure (see RunOptions.pressure_from_file)
+    params : nominal model parameters (default: the paper's); P0 is replaced by the
+        measurement's pressure (see RunOptions.pressure_from_file), and the rim is clamped
+        or free as the rim channel shows (:func:`rim_condition`)
     progress : callable(stage: str) called as each stage starts, optional
     source : {"path", "kind", "sha256"} of what the measurement came from when it was
         ingested from a UFF/CSV folder (default: the measurement file itself); recorded in
@@ -142,7 +168,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     """
     t0 = time.perf_counter()
     measurement, outdir = Path(measurement), Path(outdir)
-    params = params or TyreParameters(m_w=1000.0)
+    params = params or TyreParameters()
     say = progress or (lambda stage: None)
     say("frf")
     with open_measurement(measurement) as m:
@@ -160,6 +186,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     nominal = params
     if opt.pressure_from_file and meta["inflation_pressure"] is not None and float(meta["inflation_pressure"]) > 0:
         params = params.replace(P0=float(meta["inflation_pressure"]))
+    params, rim_how = rim_condition(r, params)
     sha = sha256_file(measurement)
     source = source or {"path": str(measurement), "kind": "measurement", "sha256": sha}
     write_frf(outdir / "frf.h5", r, input_file=str(source["path"]), input_sha256=sha, overwrite=True)
@@ -188,7 +215,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     write_text_atomic(outdir / "diagnosis.json", _json(rep), overwrite=True)
     write_text_atomic(outdir / "sensitivity.json", _json(_sensitivity(diag.augmented, n_pred)), overwrite=True)
     summary = {
-        "measurement": str(source["path"]), **meta,
+        "measurement": str(source["path"]), **meta, "rim": rim_how,
         "rejected_hits": [x.to_dict() for x in r.rejections],
         "modes_found": int(table.n_modes),
         "identified": ident["parameters"], "rms_error_pct": ident["rms_error_pct"],
@@ -201,7 +228,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     names = list(OUTPUTS) + ([measurement.name] if measurement.parent.resolve() == outdir.resolve() else [])
     manifest = {"format": "tiremodal.run", "format_version": 1, "tiremodal_version": __version__,
                 "input_file": str(source["path"]), "input_sha256": sha, "source": source, "options": opt.to_dict(),
-                "params": nominal.to_dict(), "model_P0": params.P0,
+                "params": nominal.to_dict(), "model_P0": params.P0, "model_m_w": params.m_w,
                 "outputs": {name: sha256_file(outdir / name) for name in names}, "summary": summary}
     write_text_atomic(outdir / MANIFEST, _json(manifest), overwrite=True)
     return summary

@@ -204,6 +204,7 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> s
              ("impact points × hits", f"{s['n_points']} × {s['n_hits']}"),
              ("sample rate", f"{s['sample_rate']:g} Hz"), ("modes found", s["modes_found"]),
              ("model P0", f"{man.get('model_P0', man['params']['P0']) / 1e3:g} kPa"),
+             ("rim", s.get("rim", "from the parameters")),
              ("input SHA-256", man["input_sha256"][:16] + "…")]
     out = [f"<h1>Modal test report — {_e(Path(s['measurement']).name)}</h1>",
            f"<p><b>Diagnosis:</b> {_e(s['verdict'])}</p>",
