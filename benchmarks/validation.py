@@ -191,6 +191,20 @@ the machine below). The test suite runs a seeded subset (`tests/test_validation.
 """
 
 
+HISTORY = """## History
+
+Earlier scorecards of the same matrix (totals; the per-case tables are in the git history of
+this file):
+
+| when | code | generator | found / expected | spurious / adopted | run errors | no-effect cases adopting nothing | effect cases right | matrix time |
+|---|---|---|---|---|---|---|---|---|
+| 2026-11-23, first run | the ruler on the estimator before #14/#19 (run's band 0.04–0.293 fs) | paper | 789 / 1236 (64 %) | 34 / 1068 (3.2 %) | 0 | 13 / 14 | 3 / 13 | 56 min (machine loaded) |
+| | | ring | 785 / 1342 (58 %) | 29 / 1033 (2.8 %) | 3 (NaN in sensitivity.json) | 13 / 14 | 3 / 11 | |
+| 2026-11-23, after #14 and #19 | band from the data, duplicates by the poles, crowds named; vectorised fits | paper | 1076 / 1236 (87 %) | 33 / 1389 (2.4 %) | 0 | 0 / 14 (tangential adopted: run assumed a 1,000 kg rim on clamped-rim tests) | 2 / 13 | 3.5 min |
+| | | ring | 1217 / 1342 (91 %) | 28 / 1557 (1.8 %) | 0 | 0 / 14 | 4 / 14 | |
+"""
+
+
 def write_docs(records: list[dict], path: Path, elapsed_s: float, jobs: int) -> None:
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     text = [DOC_HEAD.format(minutes=elapsed_s / 60, jobs=jobs),
@@ -198,7 +212,7 @@ def write_docs(records: list[dict], path: Path, elapsed_s: float, jobs: int) -> 
             f"{elapsed_s / 60:.1f} min.\n",
             "## Totals\n", totals(records), "\n## Scorecard\n", table(records),
             "\n## Datasheet\n", datasheet(records),
-            "\n## What was not found, case by case\n", failures(records), ""]
+            "\n## What was not found, case by case\n", failures(records), "", HISTORY]
     path.write_text("\n".join(text), encoding="utf-8")
 
 
