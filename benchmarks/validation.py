@@ -193,8 +193,7 @@ the machine below). The test suite runs a seeded subset (`tests/test_validation.
 
 HISTORY = """## History
 
-Earlier scorecards of the same matrix (totals; the per-case tables are in the git history of
-this file):
+Earlier scorecards of the same matrix, totals only (their per-case records were not kept):
 
 | when | code | generator | found / expected | spurious / adopted | run errors | no-effect cases adopting nothing | effect cases right | matrix time |
 |---|---|---|---|---|---|---|---|---|
