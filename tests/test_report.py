@@ -103,6 +103,13 @@ def test_sample_report_has_every_figure(sample_run):
     # the modal table lists every mode of modes.csv
     n_modes = len((out / "modes.csv").read_text().splitlines()) - 1
     assert n_modes == summary["modes_found"] and f"<td>{n_modes}</td>" in text
+    # the paper's comparison: the coupled model beside the flexible tread, by branch; the
+    # flexible tread (one mode per order) cannot follow the opposite-direction branch
+    assert "Where each model holds" in text and "flexible tread on an elastic foundation" in text
+    cmp = json.loads((out / "identify.json").read_text())["model_comparison"]
+    assert (cmp["flexible_tread"]["by_branch"]["opposite"]["rms_error_pct"]
+            > 2 * cmp["coupled"]["by_branch"]["opposite"]["rms_error_pct"])
+    assert "free: the rim channel (rim) moves" in text  # the sample's rim is on a 1,000 kg fixture
 
 
 def test_predictions_reach_beyond_the_measured_orders(sample_run):

@@ -207,6 +207,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     # predictions reach the highest measured order and two beyond ("the higher orders")
     n_pred = max([opt.predict_n] + [m["n"] + 2 for m in res.modes])
     ident = fit_report(res, skipped, predict_table(res, n_pred, measured=res.modes))
+    ident["model_comparison"] = _model_comparison(modes, params, res)
     write_text_atomic(outdir / "identify.json", _json(ident), overwrite=True)
     say("diagnose")
     diag = diagnose(rows, params, DiagnoseOptions(seed=opt.seed, noise_floor_pct=opt.noise_floor_pct,
@@ -345,6 +346,19 @@ def _force_autospectrum(m, freq_hz):
         f = np.where(np.isfinite(f), f, 0.0)
         acc += np.sum(np.abs(np.fft.rfft(f, axis=-1)[..., k]) ** 2, axis=0)
     return acc
+
+
+def _model_comparison(modes, params: TyreParameters, res) -> dict:
+    """The paper's comparison on this test's modes: the coupled model's errors by branch and
+    band beside the classical flexible-tread model's (:mod:`tiremodal_cli.flexible_tread`)."""
+    from .flexible_tread import errors_by_branch, fit_flexible_tread
+
+    out = {"coupled": {"rms_error_pct": res.rms_error_pct, "by_branch": errors_by_branch(res.modes)}}
+    try:
+        out["flexible_tread"] = fit_flexible_tread(modes, params).to_dict()
+    except DataFormatError as exc:
+        out["flexible_tread"] = {"skipped": str(exc)}
+    return out
 
 
 def _sensitivity(res, n_max: int) -> dict:

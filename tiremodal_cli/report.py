@@ -194,6 +194,25 @@ def _one_based(i):
     return "all" if i is None else int(i) + 1
 
 
+def _comparison_html(cmp: dict | None) -> list[str]:
+    """The coupled model beside the classical flexible-tread model: RMS error by branch and band."""
+    if not cmp:
+        return []
+    flex = cmp.get("flexible_tread", {})
+    out = ["<h3>Where each model holds</h3>"]
+    if "skipped" in flex:
+        return out + [f"<p>The flexible-tread model was not fitted: {_e(flex['skipped'])}.</p>"]
+    keys = list(dict.fromkeys(list(cmp["coupled"]["by_branch"]) + list(flex["by_branch"])))
+    rows = []
+    for name, d in (("coupled (tread, sidewall mass, rim)", cmp["coupled"]["by_branch"]),
+                    ("flexible tread on an elastic foundation", flex["by_branch"])):
+        rows.append({"model": name, **{k: d[k]["rms_error_pct"] if k in d else None for k in keys}})
+    out.append("<p>RMS frequency error (%) by branch and band. The flexible-tread model has one mode of "
+               "each order; it is fitted to the same-direction modes and set against every mode.</p>")
+    out.append(_table(rows, [("model", "model")] + [(k, f"{k} [%]") for k in keys], left=("model",)))
+    return out
+
+
 def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> str:
     s = man["summary"]
     cap = dict(FIGURES)
@@ -233,6 +252,7 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> s
         out.append("<p>Not determined by these data: " + "; ".join(f"{_e(k)} ({_e(v)})"
                                                                    for k, v in ident["undetermined"].items()) + "</p>")
     out += [fig("fit"), fig("convergence")]
+    out += _comparison_html(ident.get("model_comparison"))
     before, after = diag["residual_before"], diag["residual_after"]
     out += ["<h2>Residual diagnosis</h2>", f"<p>{_e(diag['verdict'])}</p>",
             _table([{"k": "before", "rms": before["rms_error_pct"], "max": before["max_error_pct"],
