@@ -51,3 +51,22 @@ def test_help_imports_no_command_and_no_scipy():
             "print(','.join(sorted(heavy)), file=sys.stderr)\n")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert "Commands:" in res.stdout and res.stderr.strip() == "", res.stderr
+
+
+def test_every_help_ends_with_an_example_that_uses_its_own_options():
+    import shlex
+
+    import click
+
+    from tiremodal_cli.cli.main import cli as group
+
+    ctx = click.Context(group)
+    for name in group.list_commands(ctx):
+        cmd = group.get_command(ctx, name)
+        text = cmd.get_help(click.Context(cmd, info_name=name, parent=ctx)).rstrip()
+        last = text.splitlines()[-1].strip()
+        assert text.splitlines()[-2].strip() == "Example:", name
+        words = shlex.split(last)
+        assert words[:2] == ["tiremodal", name], (name, last)
+        known = {o for p in cmd.params for o in getattr(p, "opts", []) + getattr(p, "secondary_opts", [])}
+        assert {w for w in words if w.startswith("-")} <= known, (name, last)

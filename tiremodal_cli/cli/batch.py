@@ -42,7 +42,7 @@ class _BatchProgress:
             self.bar = None
 
 
-@cli.command("batch")
+@cli.command("batch", epilog="\b\nExample:\n  tiremodal batch campaign/ -o results/ --jobs 2")
 @click.argument("roots", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("-o", "--output", "outdir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Batch folder: one sub-folder per test, summary.csv/.jsonl, campaign plots.")

@@ -40,7 +40,7 @@ def human(rep: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-@cli.command("diagnose")
+@cli.command("diagnose", epilog="\b\nExample:\n  tiremodal diagnose sample_data/paper_table_a1.csv")
 @click.argument("modes_file", type=click.Path(dir_okay=False, path_type=Path))
 @params_options
 @click.option("--free", default="k_r1,k_r2,EI", show_default=True, help="Parameters of the base fit.")

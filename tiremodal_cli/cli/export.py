@@ -23,7 +23,7 @@ def _modal_path(source: Path) -> Path:
     return source
 
 
-@cli.command("export")
+@cli.command("export", epilog="\b\nExample:\n  tiremodal export out/gl073a -o out/gl073a-shapes --format uff --gif")
 @click.argument("source", type=click.Path(exists=True, path_type=Path))
 @click.option("-o", "--output", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Folder to write (created whole, or not at all).")
@@ -40,8 +40,6 @@ def export_cmd(source, output, fmt, radii, gif, overwrite, as_json):
 
     One ring of nodes per measured location (tread, sidewall, rim) at the impact points'
     angles; each mode's radial shape, scaled to a largest tread value of 1.
-
-    Example: tiremodal export out/gl073a -o out/gl073a-shapes --format uff --gif
     """
     values = parse_key_values(radii, "--radius")
     radii_m = {}

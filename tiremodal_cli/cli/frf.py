@@ -36,7 +36,7 @@ def _check_windows(m, force_window_s, exp_tau_s, exp_end=None) -> None:
                                  param_hint="--exp-tau")
 
 
-@cli.command("frf")
+@cli.command("frf", epilog="\b\nExample:\n  tiremodal frf sample_data/gl073a_sim.h5 -o frf.h5 --uff frf.uff")
 @click.argument("measurement", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="FRF file to write (HDF5).")

@@ -66,7 +66,7 @@ def common_fit_options(f):
     return f
 
 
-@cli.command("identify")
+@cli.command("identify", epilog="\b\nExample:\n  tiremodal identify sample_data/paper_table_a1.csv --json")
 @click.argument("modes_file", type=click.Path(dir_okay=False, path_type=Path))
 @params_options
 @common_fit_options

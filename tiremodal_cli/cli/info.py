@@ -31,7 +31,7 @@ def _human(d: dict) -> str:
     return "\n".join(lines)
 
 
-@cli.command("info")
+@cli.command("info", epilog="\b\nExample:\n  tiremodal info sample_data/gl073a_sim.h5 --json")
 @click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
 @json_option
 def info_cmd(file, as_json):

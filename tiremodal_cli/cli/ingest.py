@@ -20,7 +20,7 @@ def _read_by_ingest(path: Path) -> bool:
     return path.suffix.lower() in (".uff", ".unv") or (name.startswith("point") and name.endswith(".csv"))
 
 
-@cli.command("ingest")
+@cli.command("ingest", epilog="\b\nExample:\n  tiremodal ingest sample_data/uff --mapping sample_data/uff/mapping.toml -o from_uff.h5")
 @click.argument("sources", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="Measurement file to write (HDF5).")

@@ -25,7 +25,7 @@ def read_any_frf(path: Path, mapping=None):
     return read_frf(path)
 
 
-@cli.command("lsce")
+@cli.command("lsce", epilog="\b\nExample:\n  tiremodal lsce frf.h5 -o modal.h5 --csv modes.csv")
 @click.argument("frf_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="Modal file to write (HDF5).")

@@ -53,7 +53,7 @@ def model_bases(params: TyreParameters, t, f_max, n_max=30):
     return labels, bases
 
 
-@cli.command("mac")
+@cli.command("mac", epilog="\b\nExample:\n  tiremodal mac out/gl073a/modal.h5 --analytic 12")
 @click.argument("modal_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.argument("other", required=False, type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--analytic", "analytic", type=click.IntRange(0, 200), metavar="N_MAX",

@@ -13,7 +13,7 @@ from .main import cli
 from .options import FiniteRange, PlotPath, echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
 
 
-@cli.command("predict")
+@cli.command("predict", epilog="\b\nExample:\n  tiremodal predict --n-max 12 --csv predicted.csv")
 @params_options
 @click.option("--n-max", type=click.IntRange(1, 200), default=12, show_default=True, help="Highest order listed.")
 @click.option("--csv", "csv_out", type=click.Path(dir_okay=False, path_type=Path), help="Write the table as CSV.")

@@ -11,7 +11,7 @@ from .main import cli
 from .options import Progress, echo_json, json_option
 
 
-@cli.command("report")
+@cli.command("report", epilog="\b\nExample:\n  tiremodal report out/gl073a")
 @click.argument("outdir", type=click.Path(file_okay=False, path_type=Path))
 @json_option
 def report_cmd(outdir, as_json):

@@ -21,7 +21,7 @@ def _stage_message(stage: str) -> None:
         click.echo(f"run: {stage} …", err=True)
 
 
-@cli.command("run")
+@cli.command("run", epilog="\b\nExample:\n  tiremodal run sample_data/gl073a_sim.h5 -o out/gl073a --overwrite")
 @click.argument("measurement", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--output", "outdir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Folder for every stage's output.")

@@ -14,7 +14,7 @@ from .main import cli
 from .options import PlotPath, echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
 
 
-@cli.command("sensitivity")
+@cli.command("sensitivity", epilog="\b\nExample:\n  tiremodal sensitivity --n-max 10")
 @params_options
 @click.option("--parameters", default=",".join(PAPER_STUDY), show_default=True, help="Parameters to vary.")
 @click.option("--factors", default="0.8,1.0,1.2", show_default=True, help="Scale factors of the single-variable study.")

@@ -165,7 +165,7 @@ def _toml(mapping: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-@cli.command("simulate")
+@cli.command("simulate", epilog="\b\nExample:\n  tiremodal simulate ring.h5 --model ring --variant cavity --sample-rate 2048 --seed 1")
 @click.argument("output", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--config", "config_file", type=click.Path(exists=True, dir_okay=False),
               help="TOML/JSON file: scalars, [params], [effects.NAME], [faults], [[channels]].")
