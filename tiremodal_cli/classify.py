@@ -8,8 +8,11 @@
   ("same", ω₁ of the model) or opposite ("opposite", ω₂).
 * **aliases**: a grid of N points cannot tell n from N − n, N + n, …. Within a branch the
   model's frequencies rise with n, so once a branch has reached the grid's top order
-  ⌊N/2⌋, a mode whose spatial order falls below one already passed at a lower frequency
-  takes the smallest alias that keeps the order rising.
+  ⌊N/2⌋, a mode whose spatial order falls below one already passed at a lower frequency,
+  and whose spatial order a lower mode of the branch already holds, takes the smallest
+  alias that keeps the order rising. A spatial order not yet seen on the branch is its
+  own (n = 0, the breathing mode, is out of the branch's order whenever the belt's
+  extension or a tangential stiffness lifts it).
 * **confidences**: ``n_confidence`` is the winning order's energy share; the branch's is
   |Re ρ| / (‖t‖‖s‖) with ρ = tᴴs the tread–sidewall product (1: perfectly in or out of
   phase). A mode whose tread barely moves (high-n same-direction modes) gets a low one.
@@ -117,9 +120,13 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     for br in {o[2] for o in out}:
         idx = sorted((r for r in range(len(out)) if out[r][2] == br), key=lambda r: freq_hz[r])
         top = -1
-        for r in idx:
+        for i, r in enumerate(idx):
             n = out[r][0]
-            if n < top and top >= n_top - 1:
+            # an alias needs its true order seen below it: the lower spatial order alone is
+            # no evidence (the breathing mode n = 0 can sit anywhere on the branch: with a
+            # stiff tangential or membrane term it lies above dozens of orders)
+            seen = any(out[q][0] == n for q in idx[:i])
+            if n < top and top >= n_top - 1 and seen:
                 k = 1
                 cands = []
                 while not cands or min(cands) < top:
@@ -185,7 +192,9 @@ def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points):
     The branch's dispersion f(n) is the clear modes' (both confidences ≥ 0.5) frequencies
     against their orders, interpolated, and beyond the highest measured order continued
     with the last step's slope (the same-direction branch flattens under the sidewall
-    resonance, where many orders pile up). Candidates run up to 1.5 N. Returns, per mode,
+    resonance, where many orders pile up). Candidates run up to 1.5 N; an alias order
+    that another mode of the branch holds is no candidate (its pole was found apart from
+    this one, so the two were resolved). Returns, per mode,
     the sorted candidate orders (the mode's own included) when it is in a crowd, else ().
     """
     k = len(freq_hz)
@@ -213,7 +222,10 @@ def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points):
             alias = {c for j in range(0, n_hi // max(n_points, 1) + 2)
                      for c in (j * n_points - m, j * n_points + m) if 0 <= c <= n_hi}
             bw = 2 * z[r] * f[r]
-            near = sorted(c for c in alias if abs(f_of(c) - f[r]) <= bw)
+            # an alias order that another mode of the branch already holds was resolved:
+            # the estimator found its pole apart from this one
+            held = {ns[q] for q in range(k) if q != r and branch[q] == br and ns[q] != ns[r]}
+            near = sorted(c for c in alias if abs(f_of(c) - f[r]) <= bw and (c == ns[r] or c not in held))
             if len(near) > 1:
                 out[r] = tuple(int(c) for c in near)
     return out

@@ -197,6 +197,9 @@ def _row_problem(get, n, b, f, min_confidence, min_mpc) -> str | None:
     conf, order_ok, mpc = get("n_confidence"), get("in_order"), get("mpc")
     if b not in ("same", "opposite") or n < 0 or not f > 0:
         return f"branch {b!r} / n {n} not fitted"
+    crowd = get("crowd")
+    if crowd is not None and str(crowd).strip().lower() in ("true", "1"):  # lsce: the order cannot be told
+        return f"in a crowd: its order is one of {get('n_candidates') or 'several'}"
     if conf is not None and float(conf) < min_confidence:
         return f"n_confidence {float(conf):.2f} < {min_confidence}"
     if order_ok is not None and str(order_ok).strip().lower() in ("false", "0"):
