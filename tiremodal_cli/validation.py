@@ -285,6 +285,7 @@ def score_modes(groups: list[dict], rows: list[dict], truth_modes: list[dict]) -
             r = min(ok, key=lambda r: abs(r["frequency_hz"] - g["frequency_hz"]))
             f_err.append(abs(r["frequency_hz"] / g["frequency_hz"] - 1))
             z_err.append(abs(r["damping_ratio"] / g["zeta"] - 1))
+            bw_err.append(abs(r["frequency_hz"] - g["frequency_hz"]) / (2 * g["zeta"] * g["frequency_hz"]))
             status = "found"
         elif cand:
             mis += 1
@@ -295,8 +296,6 @@ def score_modes(groups: list[dict], rows: list[dict], truth_modes: list[dict]) -
             status = "missed"
         detail.append({"frequency_hz": round(g["frequency_hz"], 3), "n": g["n"], "branch": g["branch"],
                        "status": status})
-            if g["zeta"] > 0:
-                bw_err.append(abs(r["frequency_hz"] - g["frequency_hz"]) / (2 * g["zeta"] * g["frequency_hz"]))
     tf = np.array([m["frequency_hz"] for m in truth_modes]) if truth_modes else np.zeros(0)
     spurious = [r for r in rows if not np.any(np.abs(tf / r["frequency_hz"] - 1) <= TOLERANCE)]
     return {"expected": found + mis + missed, "found": found, "mislabelled": mis, "missed": missed,
