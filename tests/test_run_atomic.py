@@ -164,3 +164,30 @@ def test_report_of_a_run_with_a_dead_channel(measured):
     body = _run_body(old, man, _load_json(old / "identify.json"), _load_json(old / "diagnosis.json"),
                      {stem: b"" for stem, _ in FIGURES})
     assert ">all<" in body
+
+
+def test_modal_file_stores_no_nan_for_a_dead_channel(measured):
+    """The dead rim channel's shapes, fit errors and synthesis are an explicit null in the
+    modal file (fill value 0, ``channel_live`` false, the reason in attributes), never a
+    stored NaN; read_modal gives them back as NaN, the live channels unchanged."""
+    import h5py
+    import numpy as np
+
+    from tiremodal_cli.modalfile import read_modal
+
+    _, old = measured
+    with h5py.File(old / "modal.h5", "r") as h:
+        live = h["channel_live"][()]
+        names = [x.decode() if isinstance(x, bytes) else x for x in h["channel_name"][()]]
+        assert not live[names.index("rim")] and live[names.index("tread")]
+        for name in ("shapes", "fit_error", "synthesis"):
+            arr = h[name][()]
+            assert np.all(np.isfinite(arr)), name
+            assert "dead channel" in h[name].attrs["null_reason"] and h[name].attrs["null_fill"] == 0
+        assert "not a member of a split pair" in h["splitting_hz"].attrs["null_reason"]
+        tread_err = h["fit_error"][names.index("tread")]
+    t = read_modal(old / "modal.h5")
+    rim = names.index("rim")
+    assert np.all(np.isnan(t.fit_error[rim])) and np.all(np.isnan(t.shapes[:, rim]))
+    assert np.all(np.isnan(t.synthesis[rim]))
+    assert np.array_equal(t.fit_error[names.index("tread")], tread_err)

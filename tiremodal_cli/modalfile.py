@@ -10,7 +10,13 @@ rad/s), ``mpc``, ``significance``, ``group``, ``n`` (−1: none), ``n_spatial``,
 ``splitting_hz`` (NaN: none), ``in_order`` (bool: within its branch's dispersion order),
 ``shapes`` (n_modes, n_channels, n_points) complex residues;
 geometry ``point_angle``, ``point_index``, ``channel_name``, ``channel_location``,
-``channel_angle``; ``fit_error`` (n_channels, n_points); the stabilization diagram
+``channel_angle``; ``fit_error`` (n_channels, n_points); ``channel_live`` (n_channels,
+bool): false for a dead channel, whose entries in ``shapes``, ``fit_error`` and
+``synthesis`` hold the fill value 0 — each of those datasets says so in its attributes
+``null_fill``, ``null_where``, ``null_reason`` (no NaN is stored for them; ``read_modal``
+gives NaN there in memory); the per-mode NaN of ``n_confidence``, ``branch_confidence``,
+``splitting_hz`` is a "none" named in their ``null_value`` / ``null_reason`` attributes;
+the stabilization diagram
 ``diagram`` (n_poles, 5): group, order, frequency_hz, damping_ratio, status code
 (0 new, 1 f, 2 fd, 3 fv, 4 stable); optionally the re-synthesised FRFs of the modal
 model (with its residual terms) ``synthesis`` (n_channels, n_points, n_band) complex64
@@ -167,18 +173,59 @@ def write_modal(path, t: ModalTable, *, input_file: str = "", input_sha256: str 
             a["meta"] = json.dumps(t.meta or {}, default=float)
             a["clusters"] = json.dumps(t.clusters or [], default=float)
             a["rejected"] = json.dumps(t.rejected or [], default=float)
+            live = channel_live(t)
+            h.create_dataset("channel_live", data=live)
+            h["channel_live"].attrs["meaning"] = DEAD_REASON
             for name in ("frequency_hz", "damping_ratio", "pole", "mpc", "significance", "group", "n", "n_spatial",
-                         "n_confidence", "branch_confidence", "pair", "splitting_hz", "in_order", "shapes", "point_angle",
-                         "point_index", "channel_angle", "fit_error", "diagram"):
+                         "n_confidence", "branch_confidence", "pair", "splitting_hz", "in_order", "point_angle",
+                         "point_index", "channel_angle", "diagram"):
                 h.create_dataset(name, data=np.asarray(getattr(t, name)))
+                if name in PER_MODE_NULL:
+                    h[name].attrs["null_value"], h[name].attrs["null_reason"] = "NaN", PER_MODE_NULL[name]
+            per_channel = [("shapes", np.asarray(t.shapes), 1, {}), ("fit_error", np.asarray(t.fit_error), 0, {})]
+            if t.synthesis is not None and t.synthesis_freq_hz is not None:
+                per_channel.append(("synthesis", np.asarray(t.synthesis, np.complex64), 0, {"compression": "gzip"}))
+                h.create_dataset("synthesis_freq_hz", data=np.asarray(t.synthesis_freq_hz, float))
+            for name, arr, axis, kw in per_channel:
+                h.create_dataset(name, data=_fill_dead(arr, live, axis, name), **kw)
+                h[name].attrs["null_fill"] = 0.0
+                h[name].attrs["null_where"] = "channels whose channel_live is false"
+                h[name].attrs["null_reason"] = DEAD_REASON
             for name in ("branch", "channel_name", "channel_location"):
                 h.create_dataset(name, data=list(getattr(t, name)), dtype=s)
-            if t.synthesis is not None and t.synthesis_freq_hz is not None:
-                h.create_dataset("synthesis", data=np.asarray(t.synthesis, np.complex64), compression="gzip")
-                h.create_dataset("synthesis_freq_hz", data=np.asarray(t.synthesis_freq_hz, float))
+
+
+#: why a channel has no shape, fit error or synthesis (written beside those datasets)
+DEAD_REASON = ("dead channel: no signal in any hit (the FRF file's dead_channels); nothing was estimated for it, "
+               "its entries hold the fill value 0 (read_modal gives NaN)")
+#: per-mode datasets whose NaN is a documented "none", with the reason (an attribute of each)
+PER_MODE_NULL = {"n_confidence": "not classified: the points do not go round a tread (n is −1)",
+                 "branch_confidence": "not classified, or no sidewall channel to read the branch from",
+                 "splitting_hz": "not a member of a split pair (pair is −1)"}
+
+
+def channel_live(t: ModalTable) -> np.ndarray:
+    """(n_channels,) bool: False for a dead channel (its fit error and shapes NaN in memory)."""
+    fe = np.asarray(t.fit_error, dtype=float)
+    if fe.ndim != 2 or fe.shape[0] != len(t.channel_name):
+        return np.ones(len(t.channel_name), dtype=bool)
+    return ~np.all(np.isnan(fe), axis=1)
+
+
+def _fill_dead(arr, live, axis, name):
+    """The array with its dead channels (along ``axis``) set to 0; any other NaN is a bug."""
+    out = np.array(arr, copy=True)
+    idx = [slice(None)] * out.ndim
+    idx[axis] = ~live
+    out[tuple(idx)] = 0
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"modal file: {name} holds non-finite values on a live channel")
+    return out
 
 
 def read_modal(path) -> ModalTable:
+    """Read a modal file; the dead channels' shapes, fit errors and synthesis come back as
+    NaN (in the file: the fill value 0 where ``channel_live`` is false)."""
     where = str(path)
     with open_hdf5(path) as h:
         fmt = _attr_str(h.attrs, "format")
@@ -192,11 +239,23 @@ def read_modal(path) -> ModalTable:
                                        "diagram")}
             strs = {k: _strings(h[k]) for k in ("branch", "channel_name", "channel_location")}
             d.update({k: h[k][()] for k in ("synthesis", "synthesis_freq_hz") if k in h})
+            live = h["channel_live"][()].astype(bool) if "channel_live" in h else None
             a = dict(h.attrs)
         except KeyError as exc:
             raise DataFormatError(f"{where}: dataset {exc} is missing") from None
         except (OSError, ValueError) as exc:
             raise DataFormatError(f"{where}: cannot read ({exc}); the file may be truncated") from None
+
+    if live is not None:
+        if live.shape != (len(strs["channel_name"]),):
+            raise DataFormatError(f"{where}: channel_live has {live.size} entries for {len(strs['channel_name'])} channels")
+        for name, axis in (("shapes", 1), ("fit_error", 0), ("synthesis", 0)):
+            if name in d:
+                arr = np.array(d[name], dtype=complex if np.iscomplexobj(d[name]) else float)
+                idx = [slice(None)] * arr.ndim
+                idx[axis] = ~live
+                arr[tuple(idx)] = np.nan
+                d[name] = arr
 
     def js(k):
         v = a.get(k, "null")
