@@ -18,8 +18,11 @@
   phase). A mode whose tread barely moves (high-n same-direction modes) gets a low one.
 * **dispersion order**: a mode whose n exceeds that of a higher, at least as significant
   mode of its branch is flagged ``in_order = False`` (``identify`` leaves it out).
-* **split pairs**: two modes with one (n, branch) within 5 % in frequency are the cos/sin
-  members of a pair split by a broken symmetry; both are reported, with the splitting.
+* **split pairs**: two modes with one (n, branch) within 5 % in frequency, both in their
+  branch's dispersion order, are the cos/sin members of a pair split by a broken symmetry;
+  both are reported, with the splitting (a third mode of that (n, branch) out of order —
+  a misread, e.g. another order's mode seen in this order's group when the symmetry is
+  broken — does not undo the pair).
 """
 
 from __future__ import annotations
@@ -166,9 +169,10 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     pair_id = {}
     for r in range(len(out)):
         key = (ns[r], out[r][2])
-        pair_id.setdefault(key, []).append(r)
+        if in_order[r]:  # a mode out of its branch's order is a misread, no member of a pair
+            pair_id.setdefault(key, []).append(r)
     for r in range(len(out)):
-        members = pair_id[(ns[r], out[r][2])]
+        members = pair_id.get((ns[r], out[r][2]), []) if in_order[r] else []
         pid = split = None
         if len(members) == 2 and abs(freq_hz[members[0]] - freq_hz[members[1]]) < 0.05 * freq_hz[r]:
             pid = min(members)
