@@ -12,7 +12,11 @@
   and whose spatial order a lower mode of the branch already holds, takes the smallest
   alias that keeps the order rising. A spatial order not yet seen on the branch is its
   own (n = 0, the breathing mode, is out of the branch's order whenever the belt's
-  extension or a tangential stiffness lifts it).
+  extension or a tangential stiffness lifts it). A spatial order that a clear mode of the
+  branch holds more than 5 % lower (farther than a split pair) is an alias even before the
+  mark reaches ⌊N/2⌋: each order appears once per branch. Only clear modes (both
+  confidences ≥ 0.5, significance ≥ 0.3) move the mark; a mode clear only in its own order
+  group moves it by continuing the branch (at most two orders up).
 * **confidences**: ``n_confidence`` is the winning order's energy share; the branch's is
   |Re ρ| / (‖t‖‖s‖) with ρ = tᴴs the tread–sidewall product (1: perfectly in or out of
   phase). A mode whose tread barely moves (high-n same-direction modes) gets a low one.
@@ -82,7 +86,7 @@ def order_energy(shape_over_points, angles_rad) -> dict[int, float]:
 
 
 def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
-             damping_ratio=None) -> list[Classification]:
+             damping_ratio=None, significance_group=None) -> list[Classification]:
     """Classify every mode.
 
     Parameters
@@ -93,6 +97,9 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     channel_location : sequence of str
     significance : (n_modes,) array, optional — only modes ≥ 0.3 move the alias mark
     damping_ratio : (n_modes,) array, optional — for the crowd test (see :func:`_crowds`)
+    significance_group : (n_modes,) array, optional — each mode's share of the response in
+        its own order group: a mode ≥ 0.3 there (but not in the physical FRFs) moves the
+        alias mark only by continuing the branch (to at most two orders above the mark)
 
     Returns
     -------
@@ -128,8 +135,13 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
             # an alias needs its true order seen below it: the lower spatial order alone is
             # no evidence (the breathing mode n = 0 can sit anywhere on the branch: with a
             # stiff tangential or membrane term it lies above dozens of orders)
-            seen = any(out[q][0] == n for q in idx[:i])
-            if n < top and top >= n_top - 1 and seen:
+            # ... and a spatial order that a clear lower mode of the branch holds, more than a
+            # split pair's 5 % below, is an alias whether or not the mark reached ⌊N/2⌋
+            # (each order appears once per branch)
+            seen = [q for q in idx[:i] if out[q][0] == n]
+            far = any(freq_hz[r] - freq_hz[q] > 0.05 * freq_hz[r] and out[q][1] >= 0.5 and out[q][3] >= 0.5
+                      and (significance is None or significance[q] >= 0.3) for q in seen)
+            if (n < top and top >= n_top - 1 and seen) or far:
                 k = 1
                 cands = []
                 while not cands or min(cands) < top:
@@ -139,8 +151,15 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
                         break
                 n = min(cands) if cands else n
             ns[r] = n
-            clear = out[r][1] >= 0.5 and out[r][3] >= 0.5 and (significance is None or significance[r] >= 0.3)
-            if clear:
+            sure = out[r][1] >= 0.5 and out[r][3] >= 0.5
+            clear = sure and (significance is None or significance[r] >= 0.3)
+            # a mode weak in the physical FRFs but clear in its own group (an order beside a
+            # far stronger one of another order) continues the branch one order at a time
+            # (one missed order allowed); a jump is a mode of another kind seen through the
+            # tread (a cavity mode)
+            weak_next = (sure and significance_group is not None and significance_group[r] >= 0.3
+                         and top < n <= top + 2)
+            if clear or weak_next:
                 top = max(top, n)
     # dispersion order: within a branch n rises with frequency; a mode whose n exceeds that
     # of a higher, at least as significant mode of its branch is out of order (a misread)

@@ -654,10 +654,8 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
         live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels]
         locs = [r.channel_location[i] for i in live]
         if "tread" in locs:
-            # a mode's weight in the alias and dispersion rules: its share of the response in
-            # the physical FRFs or in its own order group, whichever is larger
-            sig = np.maximum(res.significance, res.meta.get("significance_in_group", res.significance))
-            classes = classify(res.freq_hz, res.shapes[:, live], r.point_angle, locs, sig, res.damping_ratio)
+            classes = classify(res.freq_hz, res.shapes[:, live], r.point_angle, locs, res.significance,
+                               res.damping_ratio, res.meta.get("significance_in_group"))
             res.meta["crowds"] = [{"frequency_hz": float(res.freq_hz[i]), "n_spatial": c.n_spatial,
                                    "n_candidates": list(c.n_candidates),
                                    "reason": "orders aliasing onto one spatial order lie within one half-power "
