@@ -20,8 +20,8 @@
 * **confidences**: ``n_confidence`` is the winning order's energy share; the branch's is
   |Re ρ| / (‖t‖‖s‖) with ρ = tᴴs the tread–sidewall product (1: perfectly in or out of
   phase). A mode whose tread barely moves (high-n same-direction modes) gets a low one.
-* **dispersion order**: a mode whose n exceeds that of a higher, at least as significant
-  mode of its branch is flagged ``in_order = False`` (``identify`` leaves it out).
+* **dispersion order**: of two modes of a branch whose orders fall as the frequency rises,
+  the less significant is flagged ``in_order = False`` (``identify`` leaves it out).
 * **split pairs**: two modes with one (n, branch) within 5 % in frequency, both in their
   branch's dispersion order, are the cos/sin members of a pair split by a broken symmetry;
   both are reported, with the splitting (a third mode of that (n, branch) out of order —
@@ -164,13 +164,13 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     # dispersion order: within a branch n rises with frequency; a mode whose n exceeds that
     # of a higher, at least as significant mode of its branch is out of order (a misread)
     sig = np.ones(len(out)) if significance is None else np.asarray(significance)
+    # (of two modes out of order the less significant is the misread: a weak mode far above
+    # the branch's saturation read as a high alias is flagged as well)
     in_order = np.ones(len(out), dtype=bool)
     for r in range(len(out)):
         for q in range(len(out)):
-            if (q != r and out[q][2] == out[r][2] and freq_hz[q] > freq_hz[r] and ns[q] < ns[r]
-                    and sig[q] >= sig[r]):
-                in_order[r] = False
-                break
+            if q != r and out[q][2] == out[r][2] and freq_hz[q] > freq_hz[r] and ns[q] < ns[r]:
+                in_order[r if sig[q] >= sig[r] else q] = False
     # a mode whose branch cannot be read (the co-located tread and sidewall sensors sit at
     # its node) beside a clear mode of the same n within 5 % is taken as that mode's partner
     for r in range(len(out)):
