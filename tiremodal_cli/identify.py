@@ -565,7 +565,12 @@ def predict_table(res: FitResult, n_max: int, *, measured=()) -> list[dict]:
         J[:, i] = (f_of(logx + d) - f_of(logx - d)) / 2e-6
     var = np.einsum("ij,jk,ik->i", J, res.covariance_log, J)
     meas = {(m["n"], m["branch"]) for m in measured}
-    return [{"n": int(n), "branch": b, "model_hz": float(f), "std_hz": float(np.sqrt(max(v, 0))),
+    # a frequency the model cannot differentiate at the fit (a NaN in its Jacobian: the
+    # rim-coupled n = 1 root switching branch under the step) has no σ: an explicit null
+    return [{"n": int(n), "branch": b, "model_hz": float(f),
+             "std_hz": float(np.sqrt(max(v, 0))) if np.isfinite(v) else None,
+             **({} if np.isfinite(v) else {"std_reason": "not computable: the model frequency is not "
+                                                         "differentiable in the parameters here"}),
              "measured": (int(n), b) in meas} for n, b, f, v in zip(ns, br, f0, var)]
 
 

@@ -190,7 +190,7 @@ def plot_dispersion(rows, *, measured=(), ax=None):
             f = np.array([x["model_hz"] for x in r])
             ax.plot(n, f, "-", color=color, label=f"model, {br}")
             if "std_hz" in r[0]:
-                sd = np.array([x["std_hz"] for x in r])
+                sd = np.array([np.nan if x["std_hz"] is None else x["std_hz"] for x in r], dtype=float)
                 ax.fill_between(n, f - 2 * sd, f + 2 * sd, color=color, alpha=0.2)
         m = [x for x in measured if x["branch"] == br]
         if m:
