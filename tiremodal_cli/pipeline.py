@@ -20,12 +20,13 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .diagnose import DiagnoseOptions, diagnose, report
+from .diagnose import DiagnoseOptions, base_fit, diagnose, report, usable_modes
 from .errors import DataFormatError, ParameterError
 from .files import _UMASK, dumps, install_dir, path_lock, refuse_input_as_output, sha256_file, write_text_atomic
 from .frf import FRFOptions, compute_frf
 from .frffile import write_frf
-from .identify import FitOptions, fit, fit_report, modes_from_rows, predict_table
+from .identify import fit_report, modes_from_rows, predict_table
+from .modalfile import no_usable_modes
 from .measurement import open_measurement
 from .modalfile import to_csv, to_rows, write_modal
 from .model import TyreParameters
@@ -147,6 +148,15 @@ def rim_condition(r, params: TyreParameters) -> tuple[TyreParameters, str]:
                                      f"moves; rim + fixture mass m_w = {m_w:g} kg to start from")
 
 
+def rim_state(how: str) -> str:
+    """The rim condition of :func:`rim_condition`'s sentence as ``diagnose`` takes it:
+    "clamped" or "free" when the rim channel said so, else "from parameters"."""
+    for state in ("clamped", "free"):
+        if how.startswith(f"{state}: the rim channel"):
+            return state
+    return "from parameters"
+
+
 def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyreParameters | None = None,
         progress=None, source: dict | None = None) -> dict:
     """Run the whole pipeline on one measurement file; return the summary.
@@ -198,20 +208,24 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     write_text_atomic(outdir / "modes.csv", to_csv(table), overwrite=True)
     rows = to_rows(table)
     say("identify")
-    modes, skipped = modes_from_rows(rows, source="modal.h5")
-    if not modes:
-        from .modalfile import no_usable_modes
-
-        raise DataFormatError(no_usable_modes(f"{source['path']} (its modal table)", rows, skipped))
-    res = fit(modes, params, FitOptions(seed=opt.seed))
+    # one base fit per run: the robust fit of the modes that diagnose would make, made here
+    # and handed to it (identify.json, diagnosis.json, run.json and the report hold it)
+    dopt = DiagnoseOptions(seed=opt.seed, noise_floor_pct=opt.noise_floor_pct, max_effects=opt.max_effects,
+                           rim=rim_state(rim_how))
+    modes, skipped, _ = usable_modes(rows, dopt, source="modal.h5", on_empty=lambda: no_usable_modes(
+        f"{source['path']} (its modal table)", rows, modes_from_rows(rows)[1]))
+    base = base_fit(modes, params, dopt)
+    res = base.fit
     # predictions reach the highest measured order and two beyond ("the higher orders")
     n_pred = max([opt.predict_n] + [m["n"] + 2 for m in res.modes])
     ident = fit_report(res, skipped, predict_table(res, n_pred, measured=res.modes))
-    ident["model_comparison"] = _model_comparison(modes, params, res)
+    ident["set_aside"] = [a.to_dict() for a in base.set_aside]
+    ident["outlier_rule"] = {"z_crit": base.z_crit, "scale": base.scale, "alpha": base.alpha,
+                             "rule": "|z − median z| / max(1, 1.4826 MAD z) > Φ⁻¹(1 − α/2N), one mode at a time"}
+    ident["model_comparison"] = _model_comparison(list(base.kept), params, res)
     write_text_atomic(outdir / "identify.json", _json(ident), overwrite=True)
     say("diagnose")
-    diag = diagnose(rows, params, DiagnoseOptions(seed=opt.seed, noise_floor_pct=opt.noise_floor_pct,
-                                                  max_effects=opt.max_effects), n_points=int(table.point_angle.size))
+    diag = diagnose(rows, params, dopt, n_points=int(table.point_angle.size), base=base)
     rep = report(diag, n_pred)
     write_text_atomic(outdir / "diagnosis.json", _json(rep), overwrite=True)
     write_text_atomic(outdir / "sensitivity.json", _json(_sensitivity(diag.augmented, n_pred)), overwrite=True)
@@ -220,6 +234,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
         "rejected_hits": [x.to_dict() for x in r.rejections],
         "modes_found": int(table.n_modes),
         "identified": ident["parameters"], "rms_error_pct": ident["rms_error_pct"],
+        "set_aside_modes": ident["set_aside"],
         "adopted_effects": rep["adopted_effects"], "parameter_off": rep["parameter_off"],
         "rms_before_pct": rep["base"]["rms_error_pct"], "rms_after_pct": rep["augmented"]["rms_error_pct"],
         "augmented_parameters": rep["augmented"]["parameters"],
