@@ -146,3 +146,20 @@ def test_report_of_a_folder_that_is_not_a_run(tmp_path):
     res = run_cli(["report", tmp_path / "nope"])
     assert res.exit_code == 2
     assert res.stderr.strip() == f"Error: {tmp_path / 'nope'}: no such folder"
+
+
+def test_the_sample_run_has_one_base_fit(sample_run):
+    """issue #15: identify makes the base fit and hands it to diagnose; identify.json,
+    diagnosis.json, run.json and the report hold the same numbers."""
+    out, summary = sample_run
+    ident = json.loads((out / "identify.json").read_text())
+    diag = json.loads((out / "diagnosis.json").read_text())
+    assert ident["rms_error_pct"] == diag["base"]["rms_error_pct"] == summary["rms_before_pct"] \
+        == summary["rms_error_pct"]
+    for name, v in ident["parameters"].items():
+        assert diag["base"]["parameters"][name]["value"] == v["value"]
+        assert summary["identified"][name]["value"] == v["value"]
+    assert ident["set_aside"] == diag["set_aside_before"] == summary["set_aside_modes"]
+    text = (out / "report.html").read_text(encoding="utf-8")
+    assert f"{ident['rms_error_pct']:.3f} %" in text
+    assert "Modes set aside" in text

@@ -251,6 +251,7 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> s
     if ident.get("undetermined"):
         out.append("<p>Not determined by these data: " + "; ".join(f"{_e(k)} ({_e(v)})"
                                                                    for k, v in ident["undetermined"].items()) + "</p>")
+    out += _set_aside_html(ident)
     out += [fig("fit"), fig("convergence")]
     out += _comparison_html(ident.get("model_comparison"))
     before, after = diag["residual_before"], diag["residual_after"]
@@ -263,7 +264,7 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> s
                     ("p", "p")], left=("k",)),
             fig("residuals"), "<h3>Candidates</h3>",
             _table([{**c, "adopted": "yes" if c["adopted"] else ""} for c in diag["candidates"]],
-                   [("name", "candidate"), ("round", "round"), ("rms_error_pct", "RMS [%]"), ("aicc", "ΔAICc"),
+                   [("name", "candidate"), ("round", "round"), ("rms_error_pct", "RMS [%]"), ("score", "ΔAICc"),
                     ("f_p_value", "F-test p"), ("adopted", "adopted"), ("reason", "reason")],
                    left=("name", "adopted", "reason"))]
     if diag.get("unexplained_modes"):
@@ -277,6 +278,23 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> s
                     ("measured", "measured [Hz]")], left=("branch",)),
             "<h2>Parameter sensitivity</h2>", fig("sensitivity")]
     return "\n".join(out)
+
+
+def _set_aside_html(ident: dict) -> list[str]:
+    """The modes the robust base fit set aside, each with its reason, and the rule."""
+    aside, rule = ident.get("set_aside"), ident.get("outlier_rule") or {}
+    if aside is None:
+        return []
+    head = [f"<h3>Modes set aside ({len(aside)})</h3>"]
+    how = (f"<p>A mode is set aside when its error stands out of the others' by more than "
+           f"{rule.get('z_crit', float('nan')):.2f} robust standard deviations (the Bonferroni limit for "
+           f"{len(ident.get('modes', [])) + len(aside)} modes at a false-rejection rate of "
+           f"{rule.get('alpha', float('nan')):g} per fit); the diagnosis asks which candidate brings it back.</p>")
+    if not aside:
+        return head + ["<p>None: the model represents every mode.</p>", how]
+    return head + [_table(aside, [("n", "n"), ("branch", "branch"), ("frequency_hz", "measured [Hz]"),
+                                  ("model_hz", "model [Hz]"), ("error_pct", "error [%]"), ("reason", "reason")],
+                          left=("branch", "reason")), how]
 
 
 def _modes_rows(folder: Path) -> list[dict]:

@@ -249,7 +249,8 @@ def expected_groups(sim, cfg: SimulationConfig) -> list[dict]:
                 peak = np.max(np.abs(sh[c][0] * phi_in)) / (2 * g["zeta"])
                 floor = _h_noise_floor(cfg, sim, f, ic)
                 best = max(best, peak / floor if floor > 0 else (np.inf if peak > 0 else 0.0))
-        out.append({"frequency_hz": f, "n": g["n"], "branch": g["branch"], "zeta": g["zeta"],
+        out.append({"frequency_hz": f, "members": list(g["members"]), "n": g["n"], "branch": g["branch"],
+                    "zeta": g["zeta"],
                     "snr": float(best), "valid": bool(f <= f_valid), "visible": bool(best >= 3.0),
                     "aliased": bool(g["n"] > n_pts / 2),
                     "foreign": g["branch"] not in ("same", "opposite", "rim")})
