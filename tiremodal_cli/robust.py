@@ -5,8 +5,9 @@ breathing mode of a tyre whose belt is extensible, a spatial alias read as a low
 fixture mode — pull every parameter, and with them every other mode, by several
 standard deviations. :func:`robust_fit` fits, looks at every mode's normalised error
 ``z = (f_model − f_measured) / σ_f``, and sets aside the worst mode while it is an outlier,
-refitting after each one (one at a time, so that a mode dragged off by the outlier comes
-back once the outlier is gone). A mode set aside earlier comes back as soon as the refit
+refitting after each step (the worst mode, with every mode at least half as far out, so
+that gross outliers go in one step while a mode merely dragged off by them stays, and comes
+back once they are gone). A mode set aside earlier comes back as soon as the refit
 puts it inside the limit.
 
 The rule
@@ -174,7 +175,12 @@ def robust_fit(modes, base: TyreParameters, opt: FitOptions, *, alpha: float = 0
         if back and not cand:
             out -= set(back)  # the refit brought them back: fit them again
         elif cand and len(out) < max_out:
-            out.add(max(cand, key=lambda i: t[i]))
+            # the worst, and with it every mode at least half as far out (gross outliers in
+            # one step; one dragged off by them comes back below, "back")
+            worst = max(t[i] for i in cand)
+            for i in sorted(cand, key=lambda i: -t[i]):
+                if t[i] >= 0.5 * worst and len(out) < max_out:
+                    out.add(i)
         else:
             break
         kept = [i for i in range(N) if i not in out]

@@ -18,6 +18,10 @@ the n = 0 tread motion is held to a few tenths of a per cent and the breathing m
 sidewall's own, sqrt((k_r1 + k_r2)/m_s)/2π; a fit that rests on it says "a belt too stiff in
 hoop for the modes to tell how stiff".
 
+The cavity air's uniform pressure stiffens the same motion (ρc²b²/A per length, A the
+cavity's cross-section): on n = 0 that stiffness and EA/R² are one term, and frequencies
+alone cannot tell whose it is — the verdict names the hoop stiffness and says so.
+
 Residual signature: the n = 0 modes (same and opposite) measured far above the model —
 a factor of several for a steel belt — the other orders untouched; the base fit sets
 them aside, and this effect brings them back.
