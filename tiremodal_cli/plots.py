@@ -53,7 +53,7 @@ def plot_frf(r, *, points=(0,), channels=None, axes=None):
             axes[1].plot(r.freq_hz, np.rad2deg(np.angle(r.H[ic, ip])), lw=0.8)
             axes[2].plot(r.freq_hz, r.coherence[ic, ip], lw=0.8)
     units = {"accelerance": "m/s²/N", "mobility": "m/s/N", "receptance": "m/N"}[r.form]
-    axes[0].set_ylabel(f"|{r.estimator}| [{units}]")
+    axes[0].set_ylabel(f"|{r.estimator if r.estimator != 'unknown' else 'H'}| [{units}]")
     axes[1].set_ylabel("phase [°]")
     axes[1].set_yticks([-180, -90, 0, 90, 180])
     axes[2].set_ylabel("coherence")

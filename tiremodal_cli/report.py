@@ -218,21 +218,21 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> s
     cap = dict(FIGURES)
     fig = (lambda k: _img(pngs[k], cap[k]))
     p_kpa = None if s.get("inflation_pressure") is None else s["inflation_pressure"] / 1e3
-    facts = [("measurement", s["measurement"]), ("tyre", s.get("tire")),
-             ("inflation pressure", None if p_kpa is None else f"{p_kpa:g} kPa"),
-             ("impact points × hits", f"{s['n_points']} × {s['n_hits']}"),
-             ("sample rate", f"{s['sample_rate']:g} Hz"), ("modes found", s["modes_found"]),
-             ("model P0", f"{man.get('model_P0', man['params']['P0']) / 1e3:g} kPa"),
-             ("rim", s.get("rim", "from the parameters")),
-             ("input SHA-256", man["input_sha256"][:16] + "…")]
+    facts = _test_facts(man)
     out = [f"<h1>Modal test report — {_e(Path(s['measurement']).name)}</h1>",
-           f"<p><b>Diagnosis:</b> {_e(s['verdict'])}</p>",
-           "<h2>Test</h2>", _table([{"k": k, "v": v} for k, v in facts], [("k", ""), ("v", "")], left=("k", "v"))]
+           f"<p><b>Diagnosis:</b> {_e(s['verdict'])}</p>"]
+    if s.get("starts_at") == "lsce":
+        out.append("<p><b>Input:</b> FRFs from another system (UFF 58): the pipeline started at lsce. "
+                   "There were no time records, so no hit checks, no windows and no force spectrum here; "
+                   "the FRFs are the other system's, taken to SI as stated below.</p>")
+    out += ["<h2>Test</h2>", _table([{"k": k, "v": v} for k, v in facts], [("k", ""), ("v", "")], left=("k", "v"))]
     rej = s.get("rejected_hits") or []
     out.append(f"<h2>Rejected hits ({len(rej)})</h2>")
     out.append(_table([{**x, "point": _one_based(x.get("point")), "hit": _one_based(x.get("hit"))} for x in rej],
                       [("point", "point"), ("hit", "hit"), ("channel", "channel"), ("reason", "reason")],
-                      left=("channel", "reason")) if rej else "<p>None: every hit passed the checks.</p>")
+                      left=("channel", "reason")) if rej else
+               "<p>Not checked: the input holds FRFs, not hits.</p>" if s.get("starts_at") == "lsce" else
+               "<p>None: every hit passed the checks.</p>")
     out += ["<h2>FRFs and coherence</h2>", fig("frf"), "<h2>Stabilization diagram</h2>", fig("stabilization")]
     modes = _modes_rows(folder)
     out += ["<h2>Modal table</h2>", _table(modes, [("mode", "mode"), ("frequency_hz", "f [Hz]"),
@@ -277,6 +277,34 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> s
                     ("measured", "measured [Hz]")], left=("branch",)),
             "<h2>Parameter sensitivity</h2>", fig("sensitivity")]
     return "\n".join(out)
+
+
+def _test_facts(man: dict) -> list[tuple[str, object]]:
+    """The test's facts for the page's first table: (label, value) rows."""
+    s = man["summary"]
+    p_kpa = None if s.get("inflation_pressure") is None else s["inflation_pressure"] / 1e3
+    facts = [("measurement", s["measurement"]), ("tyre", s.get("tire")),
+             ("inflation pressure", None if p_kpa is None else f"{p_kpa:g} kPa")]
+    src = s.get("frf_source")
+    if src:
+        from .frffile import UNITS
+
+        facts += [("input", f"{src['kind']}; the pipeline started at lsce"),
+                  ("impact points", s["n_points"]),
+                  ("FRF units", f"{src['unit_in_file']} in the file, × {src['to_si']:.6g} → {UNITS[src['form']]} "
+                                f"({src['form']}); from {src['from']}"),
+                  ("point angles from", src["geometry"]),
+                  ("sign flipped (negative direction code)", ", ".join(src["sign_flipped"]) or "none")]
+        if src.get("header"):
+            facts.append(("file header (UFF 151)", "; ".join(f"{k}: {v}" for k, v in src["header"].items() if v)))
+    else:
+        facts += [("impact points × hits", f"{s['n_points']} × {s['n_hits']}"),
+                  ("sample rate", f"{s['sample_rate']:g} Hz")]
+    facts += [("modes found", s["modes_found"]),
+              ("model P0", f"{man.get('model_P0', man['params']['P0']) / 1e3:g} kPa"),
+              ("rim", s.get("rim", "from the parameters")),
+              ("input SHA-256", man["input_sha256"][:16] + "…")]
+    return facts
 
 
 def _modes_rows(folder: Path) -> list[dict]:
