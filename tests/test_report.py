@@ -82,8 +82,10 @@ def sample_run(tmp_path_factory):
 def test_sample_report_has_every_figure(sample_run):
     out, summary = sample_run
     page = _parse(out / "report.html")
-    assert len(page.images) == len(FIGURES)
-    for src in page.images:
+    pngs = [s for s in page.images if s.startswith("data:image/png")]
+    gifs = [s for s in page.images if s.startswith("data:image/gif")]
+    assert len(pngs) == len(FIGURES) and len(gifs) == summary["modes_found"] == len(page.images) - len(pngs)
+    for src in pngs:
         img = _decode_png(src)
         assert img.ndim == 3 and img.shape[0] > 200 and img.shape[1] > 300
         assert img[..., :3].std() > 0.01  # not a blank canvas
@@ -110,6 +112,55 @@ def test_sample_report_has_every_figure(sample_run):
     assert (cmp["flexible_tread"]["by_branch"]["opposite"]["rms_error_pct"]
             > 2 * cmp["coupled"]["by_branch"]["opposite"]["rms_error_pct"])
     assert "free: the rim channel (rim) moves" in text  # the sample's rim is on a 1,000 kg fixture
+
+
+def test_report_mode_animations_and_size(sample_run):
+    """One looping GIF per mode (decodable, moving: its frames differ), in the page and in
+    figures/modes/; the whole page under 10 MB (the issue's bound for a 34-mode report)."""
+    from PIL import Image
+
+    out, summary = sample_run
+    page = _parse(out / "report.html")
+    gifs = [s for s in page.images if s.startswith("data:image/gif")]
+    assert len(gifs) == summary["modes_found"] >= 34
+    assert (out / "report.html").stat().st_size < 10e6
+    im = Image.open(io.BytesIO(base64.b64decode(gifs[3].split(",", 1)[1])))
+    assert im.n_frames >= 8
+    frames = []
+    for i in (0, im.n_frames // 4):
+        im.seek(i)
+        frames.append(np.asarray(im.convert("L"), float))
+    assert np.abs(frames[0] - frames[1]).mean() > 0.1  # the rings move
+    assert len(list((out / "figures" / "modes").glob("mode_*.gif"))) == summary["modes_found"]
+
+
+def test_report_predictions_provenance_and_names(sample_run):
+    """The predictions table's measured column holds the measured frequencies (Hz, of the
+    diagnosis' modes), not flags; the footer says when, with what commit, by which command,
+    with which options and from which input (full SHA-256); parameters carry names and units."""
+    import re
+
+    out, summary = sample_run
+    text = (out / "report.html").read_text(encoding="utf-8")
+    d = json.loads((out / "diagnosis.json").read_text())
+    man = json.loads((out / "run.json").read_text())
+    sec = text[text.index("<h2>Predictions</h2>"):text.index("<h2>Parameter sensitivity</h2>")]
+    rows = re.findall(r"<tr><td>(\d+)</td><td class=\"l\">(\w+)</td><td>[^<]*</td><td>[^<]*</td><td>([^<]*)</td></tr>",
+                      sec)
+    assert len(rows) == len(d["predictions"]["augmented"])
+    seen = 0
+    for n, br, meas in rows:
+        want = sorted(m["measured_hz"] for m in d["modes"] if m["n"] == int(n) and m["branch"] == br)
+        got = [float(x) for x in meas.split(";") if x.strip()]
+        assert got == pytest.approx(want, rel=1e-3), (n, br)
+        seen += bool(want)
+    assert seen >= 20
+    foot = text[text.index("<h2>Provenance</h2>"):]
+    assert man["input_sha256"] in foot and man["created_utc"] in foot and "exp_end = 0.05" in foot
+    assert man["command"] in foot or "not recorded" in foot
+    for words in ("tread–sidewall radial stiffness per length k_r1 [N/m²]", "tread bending stiffness EI [N·m²]",
+                  "sidewall circumferential (membrane) stiffness"):
+        assert words in text, words
 
 
 def test_predictions_reach_beyond_the_measured_orders(sample_run):

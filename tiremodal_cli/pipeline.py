@@ -230,7 +230,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
         "seconds": time.perf_counter() - t0,
     }
     names = list(OUTPUTS) + ([measurement.name] if measurement.parent.resolve() == outdir.resolve() else [])
-    manifest = {"format": "tiremodal.run", "format_version": 1, "tiremodal_version": __version__,
+    manifest = {"format": "tiremodal.run", "format_version": 1, **provenance(),
                 "input_file": str(source["path"]), "input_sha256": sha, "source": source, "options": opt.to_dict(),
                 "params": nominal.to_dict(), "model_P0": params.P0, "model_m_w": params.m_w,
                 "outputs": {name: sha256_file(outdir / name) for name in names}, "summary": summary}
@@ -352,6 +352,41 @@ def _force_autospectrum(m, freq_hz):
         f = np.where(np.isfinite(f), f, 0.0)
         acc += np.sum(np.abs(np.fft.rfft(f, axis=-1)[..., k]) ** 2, axis=0)
     return acc
+
+
+def provenance() -> dict:
+    """When and with what a result is made: UTC time, tiremodal's version and git commit (of
+    the checkout the package runs from; absent when it is not one, e.g. an installed wheel),
+    and the command line (``tiremodal …`` as typed)."""
+    import datetime
+    import shlex
+    import subprocess
+    import sys
+
+    out = {"created_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
+           "tiremodal_version": __version__}
+    global _COMMIT
+    if _COMMIT is None:
+        _COMMIT = ""
+        try:
+            here = Path(__file__).resolve().parent
+            rev = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True,
+                                 timeout=5)
+            if rev.returncode == 0:
+                dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
+                                       capture_output=True, text=True, timeout=5)
+                _COMMIT = rev.stdout.strip()[:12] + ("+changes" if dirty.stdout.strip() else "")
+        except (OSError, subprocess.SubprocessError):
+            pass
+    if _COMMIT:
+        out["tiremodal_commit"] = _COMMIT
+    argv = list(sys.argv)
+    prog = Path(argv[0]).name if argv else "tiremodal"
+    out["command"] = shlex.join(["tiremodal" if prog in ("tiremodal", "__main__.py") else prog] + argv[1:])
+    return out
+
+
+_COMMIT: str | None = None
 
 
 def _frf_stage(measurement: Path, opt: RunOptions):

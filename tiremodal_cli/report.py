@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from . import __version__, names
 from .errors import DataFormatError
 from .files import _UMASK, install_dir, write_text_atomic
 from .pipeline import MANIFEST, read_manifest, verify_manifest
@@ -56,6 +56,8 @@ h1{font-size:1.5em;border-bottom:2px solid #345;padding-bottom:.2em}h2{font-size
 table{border-collapse:collapse;font-size:.85em;margin:.5em 0}td,th{border:1px solid #ccc;padding:.2em .5em;
 text-align:right}th{background:#eef2f6}td.l,th.l{text-align:left}figure{margin:1em 0}
 figure img{max-width:100%;border:1px solid #ddd}figcaption{font-size:.85em;color:#555}
+.gifs{display:flex;flex-wrap:wrap;gap:.3em}.gifs figure{margin:0;width:150px}
+.gifs img{width:150px;border:none}.gifs figcaption{font-size:.7em}
 .ok{color:#161}.bad{color:#a11}.muted{color:#777;font-size:.85em}
 """
 
@@ -82,10 +84,32 @@ def _table(rows: list[dict], cols: list[tuple[str, str]], *, left=()) -> str:
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
-def _page(title: str, body: str) -> str:
+def _page(title: str, body: str, footer: str = "") -> str:
     return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title>'
             f"<style>{_CSS}</style></head><body>\n{body}\n"
-            f'<p class="muted">tiremodal {_e(__version__)}</p></body></html>\n')
+            f'<footer class="muted">{footer or _e(_written_by())}</footer></body></html>\n')
+
+
+def _written_by() -> str:
+    from .pipeline import provenance
+
+    p = provenance()
+    return (f"Page written {p['created_utc']} by tiremodal {p['tiremodal_version']}"
+            + (f" (commit {p['tiremodal_commit']})" if p.get("tiremodal_commit") else "") + ".")
+
+
+def _footer(man: dict) -> str:
+    """Provenance of a run's page: when and how the results were made, from what input."""
+    rows = [("results made", man.get("created_utc", "not recorded (an older run)")),
+            ("by", f"tiremodal {man.get('tiremodal_version', '?')}"
+                   + (f", commit {man['tiremodal_commit']}" if man.get("tiremodal_commit") else
+                      ", commit not known (not run from a git checkout)")),
+            ("command", man.get("command", "not recorded")),
+            ("options", ", ".join(f"{k} = {v}" for k, v in (man.get("options") or {}).items())),
+            ("input", f"{man.get('input_file', '')} (SHA-256 {man.get('input_sha256', '')})")]
+    return ("<h2>Provenance</h2>" + _table([{"k": k, "v": v} for k, v in rows], [("k", ""), ("v", "")],
+                                             left=("k", "v"))
+            + f"<p>{_e(_written_by())}</p>")
 
 
 def _render(fig, folder: Path, stem: str) -> bytes:
@@ -181,7 +205,11 @@ def report_run(folder, *, progress: Callable[[str], None] | None = None) -> Path
             if progress:
                 progress(stem)
             pngs[stem] = _render(makers[stem](), tmp, stem)
-        html_text = _page(f"tiremodal report: {man['summary']['measurement']}", _run_body(folder, man, ident, diag, pngs))
+        if progress:
+            progress("mode animations")
+        gifs = _mode_gifs(folder, tmp)
+        body = _run_body(folder, man, ident, diag, pngs, gifs)
+        html_text = _page(f"tiremodal report: {man['summary']['measurement']}", body, _footer(man))
         install_dir(tmp, folder / FIGURE_DIR)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -213,7 +241,35 @@ def _comparison_html(cmp: dict | None) -> list[str]:
     return out
 
 
-def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> str:
+def _mode_gifs(folder: Path, figdir: Path) -> list[tuple[str, bytes]]:
+    """Each mode moving (tread, sidewall and rim rings in the tyre's plane), as GIFs: written
+    to ``figures/modes/mode_NN.gif`` and returned as (caption, bytes) for the page
+    (about 40 kB a mode: a 34-mode report stays well under 10 MB)."""
+    from .export import shape_set
+    from .modalfile import read_modal
+    from .plots import mode_gif
+
+    table = read_modal(folder / "modal.h5")
+    if table.n_modes == 0 or "tread" not in table.channel_location:
+        return []
+    s = shape_set(table)
+    (figdir / "modes").mkdir()
+    out = []
+    for k in range(table.n_modes):
+        gif = mode_gif(s, k)
+        (figdir / "modes" / f"mode_{k + 1:02d}.gif").write_bytes(gif)
+        out.append((f"mode {k + 1}: {s.frequency_hz[k]:.1f} Hz {s.label[k]}", gif))
+    return out
+
+
+def _gif_grid(gifs: list[tuple[str, bytes]]) -> str:
+    cells = "".join(f'<figure class="gif"><img alt="{_e(c)}" src="data:image/gif;base64,'
+                    f'{base64.b64encode(b).decode("ascii")}"><figcaption>{_e(c)}</figcaption></figure>'
+                    for c, b in gifs)
+    return f'<div class="gifs">{cells}</div>'
+
+
+def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict, gifs=()) -> str:
     s = man["summary"]
     cap = dict(FIGURES)
     fig = (lambda k: _img(pngs[k], cap[k]))
@@ -239,9 +295,14 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> s
                                                    ("damping_pct", "ζ [%]"), ("n", "n"), ("branch", "branch"),
                                                    ("n_confidence", "n conf."), ("mpc", "MPC"),
                                                    ("frequency_uncertainty_hz", "σf [Hz]")], left=("branch",))]
-    out += ["<h2>MAC matrix</h2>", fig("mac"), "<h2>Mode shapes</h2>", fig("shapes"),
-            "<h2>Measured against synthesised FRFs</h2>", fig("synthesis")]
-    par = [{"name": k, "value": v["value"], "std_error": v["std_error"],
+    out += ["<h2>MAC matrix</h2>", fig("mac"), "<h2>Mode shapes</h2>", fig("shapes")]
+    if gifs:
+        out += ["<h3>The modes moving</h3>",
+                "<p>Each mode over one period: tread (blue), sidewall (red) and rim (grey) displaced radially "
+                "by Re(φ e<sup>iωt</sup>), the largest displacement drawn at a fifth of the radius.</p>",
+                _gif_grid(gifs)]
+    out += ["<h2>Measured against synthesised FRFs</h2>", fig("synthesis")]
+    par = [{"name": names.long_label(k), "value": v["value"], "std_error": v["std_error"],
             "rel": 100 * v["std_error"] / abs(v["value"]) if v["value"] else None} for k, v in ident["parameters"].items()]
     out += ["<h2>Model identification</h2>",
             f"<p>RMS frequency error {ident['rms_error_pct']:.3f} %, max {ident['max_error_pct']:.3f} % over "
@@ -262,7 +323,8 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> s
                    [("k", ""), ("rms", "RMS error [%]"), ("max", "max error [%]"), ("chi2", "χ²"), ("dof", "dof"),
                     ("p", "p")], left=("k",)),
             fig("residuals"), "<h3>Candidates</h3>",
-            _table([{**c, "adopted": "yes" if c["adopted"] else ""} for c in diag["candidates"]],
+            _table([{**c, "name": f"{names.effect_title(c['name'])} ({c['name']})",
+                     "adopted": "yes" if c["adopted"] else ""} for c in diag["candidates"]],
                    [("name", "candidate"), ("round", "round"), ("rms_error_pct", "RMS [%]"), ("aicc", "ΔAICc"),
                     ("f_p_value", "F-test p"), ("adopted", "adopted"), ("reason", "reason")],
                    left=("name", "adopted", "reason"))]
@@ -272,11 +334,21 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> s
                        left=("reason",))]
     preds = diag["predictions"]["augmented"]
     out += ["<h2>Predictions</h2>", fig("predictions"),
-            _table([{**p, "measured": "" if p.get("measured") is None else p["measured"]} for p in preds],
+            _table(_predictions_rows(preds, diag["modes"]),
                    [("n", "n"), ("branch", "branch"), ("model_hz", "model [Hz]"), ("std_hz", "σ [Hz]"),
                     ("measured", "measured [Hz]")], left=("branch",)),
             "<h2>Parameter sensitivity</h2>", fig("sensitivity")]
     return "\n".join(out)
+
+
+def _predictions_rows(preds: list[dict], modes: list[dict]) -> list[dict]:
+    """The final model's predictions with the measured frequency of each (n, branch) in Hz
+    (several, joined, for a split pair; blank where the test has none)."""
+    out = []
+    for p in preds:
+        f = [m["measured_hz"] for m in modes if m["n"] == p["n"] and m["branch"] == p["branch"]]
+        out.append({**p, "measured": "; ".join(f"{x:.4g}" for x in sorted(f))})
+    return out
 
 
 def _test_facts(man: dict) -> list[tuple[str, object]]:
@@ -351,7 +423,8 @@ def report_batch(outdir, *, progress: Callable[[str, int, int], None] | None = N
         os.chmod(tmp, 0o777 & ~_UMASK)
         try:
             figs = [(_render(plot_campaign_parameters(recs), tmp, "campaign_parameters"),
-                     "Identified parameters across the tests (± 1 standard error)."),
+                     "Identified parameters across the tests (± 1 standard error), and the parameters of the "
+                     "effects the diagnosis added (final model); repeats at one condition side by side."),
                     (_render(plot_campaign_frequencies(recs), tmp, "campaign_frequencies"),
                      "Measured frequency of each (n, branch) across the tests.")]
             install_dir(tmp, outdir / FIGURE_DIR)
@@ -368,17 +441,34 @@ def report_batch(outdir, *, progress: Callable[[str, int, int], None] | None = N
             f'<td class="l">{name}</td>', f'<td class="l {cls}">{_e(r["status"])}</td>',
             f"<td>{_num(None if p is None else p / 1e3, '{:g}')}</td>", f"<td>{_num(r.get('modes_found'))}</td>",
             f"<td>{_num(r.get('rms_before_pct'), '{:.3f}')}</td>", f"<td>{_num(r.get('rms_after_pct'), '{:.3f}')}</td>",
-            f'<td class="l">{_e(", ".join((r.get("adopted_effects") or []) + (r.get("parameter_off") or [])))}</td>',
+            f'<td class="l">{_e(_added(r))}</td>',
+            f'<td class="l">{_e(_effect_values(r))}</td>',
             f'<td class="l">{_e(r.get("reason"))}</td>']) + "</tr>")
     head = "".join(f'<th class="{c}">{h}</th>' for h, c in (
         ("test", "l"), ("status", "l"), ("pressure [kPa]", ""), ("modes", ""), ("RMS before [%]", ""),
-        ("RMS after [%]", ""), ("added to the model", "l"), ("reason", "l")))
+        ("RMS after [%]", ""), ("added to the model", "l"), ("its parameters (final model)", "l"), ("reason", "l")))
     body = [f"<h1>Campaign report — {_e(outdir.resolve().name)}</h1>",
             f"<p>{len(recs)} tests: {n['done'] + n['skipped']} with outputs, {n['failed']} failed.</p>",
             f"<table><tr>{head}</tr>{''.join(rows)}</table>"]
     body += [_img(png, cap) for png, cap in figs]
     return write_text_atomic(outdir / INDEX_HTML, _page(f"tiremodal campaign: {outdir.name}", "\n".join(body)),
                              overwrite=True)
+
+
+def _added(rec: dict) -> str:
+    """What the diagnosis added to the model of one test, in words."""
+    return "; ".join(names.effect_title(x) for x in (rec.get("adopted_effects") or []) + (rec.get("parameter_off") or []))
+
+
+def _effect_values(rec: dict) -> str:
+    """The final model's effect parameters of one test: ``T_s [N] = 2.16e+04 ± 35``."""
+    out = []
+    for k, v in (rec.get("augmented_parameters") or {}).items():
+        if "." in k:
+            v = v if isinstance(v, dict) else {"value": v}
+            e = v.get("std_error")
+            out.append(f"{names.label(k)} = {v['value']:.4g}" + ("" if e is None else f" ± {e:.2g}"))
+    return "; ".join(out)
 
 
 def report(outdir, *, progress=None) -> list[Path]:
