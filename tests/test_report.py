@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 import io
 import json
+import os
 import xml.etree.ElementTree as ET
 from html.parser import HTMLParser
 from pathlib import Path
@@ -144,7 +145,7 @@ def test_report_predictions_provenance_and_names(sample_run):
     text = (out / "report.html").read_text(encoding="utf-8")
     d = json.loads((out / "diagnosis.json").read_text())
     man = json.loads((out / "run.json").read_text())
-    sec = text[text.index("<h2>Predictions</h2>"):text.index("<h2>Parameter sensitivity</h2>")]
+    sec = text[text.index('<h2 id="predictions">'):text.index('<h2 id="parameter-sensitivity">')]
     rows = re.findall(r"<tr><td>(\d+)</td><td class=\"l\">(\w+)</td><td>[^<]*</td><td>[^<]*</td><td>([^<]*)</td></tr>",
                       sec)
     assert len(rows) == len(d["predictions"]["augmented"])
@@ -155,7 +156,7 @@ def test_report_predictions_provenance_and_names(sample_run):
         assert got == pytest.approx(want, rel=1e-3), (n, br)
         seen += bool(want)
     assert seen >= 20
-    foot = text[text.index("<h2>Provenance</h2>"):]
+    foot = text[text.index('<h2 id="provenance">'):]
     assert man["input_sha256"] in foot and man["created_utc"] in foot and "exp_end = 0.05" in foot
     assert man["command"] in foot or "not recorded" in foot
     for words in ("tread–sidewall radial stiffness per length k_r1 [N/m²]", "tread bending stiffness EI [N·m²]",
@@ -197,3 +198,44 @@ def test_report_of_a_folder_that_is_not_a_run(tmp_path):
     res = run_cli(["report", tmp_path / "nope"])
     assert res.exit_code == 2
     assert res.stderr.strip() == f"Error: {tmp_path / 'nope'}: no such folder"
+
+
+def test_report_in_a_real_browser(sample_run, tmp_path):
+    """The page in headless Chromium: it loads with no console error or warning, no
+    exception and no failed load (a page that logs an error is caught: the check can
+    fail), every image decodes, nothing overflows the width; screenshots taken.
+    ``TIREMODAL_SCREENSHOTS=docs/images`` writes them (as small palette PNGs) for
+    docs/report.md."""
+    from browser import CHROMIUM, Browser
+
+    if not CHROMIUM.exists():
+        pytest.skip(f"Debian's Chromium is not installed ({CHROMIUM} absent; CI machines have none): "
+                    "apt-get install chromium to run the browser check")
+    out, summary = sample_run
+    bad = tmp_path / "bad.html"
+    bad.write_text('<!DOCTYPE html><html><body><p>x</p><script>console.error("planted")</script></body></html>')
+    shots = tmp_path / "shots"
+    shots.mkdir()
+    with Browser(width=1150, height=900) as b:
+        b.open(bad.as_uri())
+        assert any("planted" in p for p in b.problems)  # the check sees a console error
+        b.open((out / "report.html").as_uri())
+        assert b.problems == []
+        assert b.js("document.title").startswith("tiremodal report")
+        assert b.js("document.images.length") == len(FIGURES) + summary["modes_found"]
+        assert b.js("Array.from(document.images).filter(i => !(i.complete && i.naturalWidth > 0)).length") == 0
+        assert b.js("document.documentElement.scrollWidth <= window.innerWidth")
+        files = [b.screenshot(shots / "report_top.png"),
+                 b.screenshot(shots / "report_stabilization.png", element_id="stabilization-diagram", height=1080),
+                 b.screenshot(shots / "report_modes_moving.png", element_id="the-modes-moving", height=560)]
+    for f in files:
+        img = mpimg.imread(f)
+        assert img.shape[1] >= 1100 and img.shape[0] >= 500 and img[..., :3].std() > 0.05
+    dest = os.environ.get("TIREMODAL_SCREENSHOTS")
+    if dest:
+        from PIL import Image
+
+        for f in files:
+            im = Image.open(f).convert("RGB")
+            im = im.resize((im.width * 3 // 4, im.height * 3 // 4), Image.Resampling.LANCZOS)
+            im.convert("P", palette=Image.Palette.ADAPTIVE, colors=64).save(Path(dest) / f.name, optimize=True)

@@ -38,7 +38,21 @@ _SPEC = {"accelerance": 12, "mobility": 11, "receptance": 8}  # UFF specific dat
 
 def write_frf(path, r: FRFResult, *, input_file: str = "", input_sha256: str = "",
               overwrite: bool = False) -> Path:
-    """Write an FRF file atomically."""
+    """Write an FRF file (layout in the module docstring) atomically.
+
+    Parameters
+    ----------
+    path : path-like
+    r : FRFResult
+    input_file, input_sha256 : str
+        What the FRFs were estimated from (recorded as provenance).
+    overwrite : bool
+        Replace an existing file (else OutputExistsError).
+
+    Returns
+    -------
+    pathlib.Path
+    """
     s = h5py.string_dtype("utf-8")
     with atomic_path(path, overwrite=overwrite) as tmp:
         with h5py.File(tmp, "w") as h:
@@ -66,7 +80,23 @@ def write_frf(path, r: FRFResult, *, input_file: str = "", input_sha256: str = "
 
 
 def read_frf(path) -> FRFResult:
-    """Read an FRF file written by :func:`write_frf`; DataFormatError on anything else."""
+    """Read an FRF file written by :func:`write_frf`.
+
+    Parameters
+    ----------
+    path : path-like
+
+    Returns
+    -------
+    FRFResult
+        H (n_channels, n_points, n_freq) complex in the form's SI unit per N, coherence,
+        geometry (rad), rejections and provenance.
+
+    Raises
+    ------
+    DataFormatError
+        Not an FRF file, an unknown version, a missing dataset or sizes that do not match.
+    """
     where = str(path)
     with open_hdf5(path) as h:
         fmt = _attr_str(h.attrs, "format")
@@ -116,6 +146,20 @@ def write_frf_uff(path, r: FRFResult, *, point_node0: int = 101, test_name: str 
     direction +Z (3) for both. ID lines: 1 what (tiremodal version, estimator, form),
     2 which (channel / point), 3 the date written, 4 the test (``test_name``), 5 the
     number of averages. A dead channel is left out, with a warning naming it (logged).
+
+    Parameters
+    ----------
+    path : path-like
+    r : FRFResult
+    point_node0 : int
+        Node number of the first impact point.
+    test_name : str
+        Written into ID line 4.
+    overwrite : bool
+
+    Returns
+    -------
+    pathlib.Path
     """
     import datetime
     import logging

@@ -168,6 +168,13 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     mapping : mapping file (TOML/JSON) for UFF FRFs: channels, point angles, ``[test]``
 
     Files inside ``outdir`` refer to each other by name (the folder can be moved).
+
+    Returns
+    -------
+    dict
+        The summary (also ``run.json``'s ``summary``): the test's facts, rejected hits,
+        modes found, identified parameters with standard errors, the diagnosis' verdict,
+        the RMS errors before and after; for UFF FRFs ``starts_at`` and ``frf_source``.
     """
     t0 = time.perf_counter()
     outdir = Path(outdir)
@@ -263,6 +270,17 @@ def run_folder(measurement, outdir, opt: RunOptions = RunOptions(), *, params: T
     outputs (the measurement itself when it lies there, notes) are carried into the new
     one (hard links where possible); the report's views (report.html, figures/) are not.
     ``measurement`` may be a UFF file of FRFs (with an optional ``mapping``: see :func:`run`).
+
+    Parameters
+    ----------
+    measurement, outdir, opt, params, progress, mapping : as for :func:`run`
+    overwrite : bool
+        Replace the outputs of an earlier run in ``outdir``.
+
+    Returns
+    -------
+    dict
+        The summary, as :func:`run`.
 
     Raises
     ------

@@ -81,10 +81,22 @@ def _table(rows: list[dict], cols: list[tuple[str, str]], *, left=()) -> str:
         return _e(v) if isinstance(v, str) else _num(v)
     head = "".join(cell("th", k, _e(h)) for k, h in cols)
     body = "".join("<tr>" + "".join(cell("td", k, text(r.get(k))) for k, _ in cols) + "</tr>" for r in rows)
-    return f"<table><tr>{head}</tr>{body}</table>"
+    return f"<table>{f'<tr>{head}</tr>' if any(h for _, h in cols) else ''}{body}</table>"
+
+
+def _anchor(m) -> str:
+    import re
+
+    slug = re.sub(r"[^a-z0-9]+", "-", html.unescape(re.sub(r"<[^>]+>", "", m.group(2))).lower()).strip("-")
+    return f'<{m.group(1)} id="{slug}">{m.group(2)}</{m.group(1)}>'
 
 
 def _page(title: str, body: str, footer: str = "") -> str:
+    """The page: every h2/h3 gets an id from its words (``#stabilization-diagram``) to link to."""
+    import re
+
+    body = re.sub(r"<(h[23])>(.*?)</\1>", _anchor, body)
+    footer = re.sub(r"<(h[23])>(.*?)</\1>", _anchor, footer)
     return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title>'
             f"<style>{_CSS}</style></head><body>\n{body}\n"
             f'<footer class="muted">{footer or _e(_written_by())}</footer></body></html>\n')
@@ -276,7 +288,7 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict, gifs
     p_kpa = None if s.get("inflation_pressure") is None else s["inflation_pressure"] / 1e3
     facts = _test_facts(man)
     out = [f"<h1>Modal test report — {_e(Path(s['measurement']).name)}</h1>",
-           f"<p><b>Diagnosis:</b> {_e(s['verdict'])}</p>"]
+           f"<p><b>Diagnosis:</b> {_e(_in_words(s['verdict']))}</p>"]
     if s.get("starts_at") == "lsce":
         out.append("<p><b>Input:</b> FRFs from another system (UFF 58): the pipeline started at lsce. "
                    "There were no time records, so no hit checks, no windows and no force spectrum here; "
@@ -315,7 +327,7 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict, gifs
     out += [fig("fit"), fig("convergence")]
     out += _comparison_html(ident.get("model_comparison"))
     before, after = diag["residual_before"], diag["residual_after"]
-    out += ["<h2>Residual diagnosis</h2>", f"<p>{_e(diag['verdict'])}</p>",
+    out += ["<h2>Residual diagnosis</h2>", f"<p>{_e(_in_words(diag['verdict']))}</p>",
             _table([{"k": "before", "rms": before["rms_error_pct"], "max": before["max_error_pct"],
                      "chi2": before["chi2"], "dof": before["dof"], "p": before["p_value"]},
                     {"k": "after", "rms": after["rms_error_pct"], "max": after["max_error_pct"],
@@ -339,6 +351,17 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict, gifs
                     ("measured", "measured [Hz]")], left=("branch",)),
             "<h2>Parameter sensitivity</h2>", fig("sensitivity")]
     return "\n".join(out)
+
+
+def _in_words(text: str) -> str:
+    """A sentence with each effect's code name followed by its title in words."""
+    import re
+
+    from .effects import EFFECTS
+
+    for k in EFFECTS:
+        text = re.sub(rf"\b{re.escape(k)}\b", f"{k} ({names.effect_title(k)})", text)
+    return text
 
 
 def _predictions_rows(preds: list[dict], modes: list[dict]) -> list[dict]:
@@ -472,8 +495,25 @@ def _effect_values(rec: dict) -> str:
 
 
 def report(outdir, *, progress=None) -> list[Path]:
-    """Report a run folder (``run.json``) or a batch folder (``summary.jsonl``); return
-    the HTML pages written (the index last for a batch)."""
+    """Report a run folder (``run.json``) or a batch folder (``summary.jsonl``).
+
+    Parameters
+    ----------
+    outdir : path-like
+        A folder written by ``run`` (:func:`tiremodal_cli.pipeline.run_folder`) or ``batch``.
+    progress : callable, optional
+        For a batch: called with (test name, done, total) after each test's page.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The HTML pages written (the index last for a batch).
+
+    Raises
+    ------
+    DataFormatError
+        Neither a run nor a batch folder, or a run folder that does not match its manifest.
+    """
     from .batch import SUMMARY_JSONL
 
     outdir = Path(outdir)

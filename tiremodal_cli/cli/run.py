@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import click
@@ -11,14 +10,7 @@ from ..errors import OutputExistsError
 from ..files import refuse_input_as_output
 from ..pipeline import MANIFEST, OUTPUTS, RunOptions, run_folder
 from .main import cli
-from .options import FiniteRange, band_option, echo_json, json_option, load_params, params_options
-
-
-def _stage_message(stage: str) -> None:
-    """'run: STAGE …' on a terminal (as a progress bar would be); nothing in a log, whose
-    stderr is for the result's one line."""
-    if sys.stderr.isatty():
-        click.echo(f"run: {stage} …", err=True)
+from .options import FiniteRange, StageProgress, band_option, echo_json, json_option, load_params, params_options
 
 
 @cli.command("run", epilog="\b\nExample:\n  tiremodal run sample_data/gl073a_sim.h5 -o out/gl073a --overwrite")
@@ -64,8 +56,14 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
         base = base.replace(m_w=1000.0)
     opt = RunOptions(band=tuple(band) if band else None, exp_end=None if no_exp_window else exp_end, seed=seed,
                      noise_floor_pct=noise_floor_pct, max_effects=max_effects, pressure_from_file=not p0_from_params)
-    summary = run_folder(measurement, outdir, opt, params=base, overwrite=overwrite,
-                         progress=_stage_message, mapping=mapping)
+    from ..frffile import is_uff
+
+    bar = StageProgress("run", ["read FRFs" if is_uff(measurement) else "frf", "lsce", "identify", "diagnose"])
+    try:
+        summary = run_folder(measurement, outdir, opt, params=base, overwrite=overwrite, progress=bar,
+                             mapping=mapping)
+    finally:
+        bar.close()
     if as_json:
         echo_json(summary)
         return
