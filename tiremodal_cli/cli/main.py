@@ -86,6 +86,18 @@ class _LazyCommands(dict):
         return dict.items(self)
 
 
+class _Stderr(logging.StreamHandler):
+    """A handler writing to the ``sys.stderr`` of the moment (a test runner swaps it)."""
+
+    @property
+    def stream(self):
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value):
+        pass
+
+
 class TiremodalGroup(click.Group):
     def __init__(self, *args, **kw):
         super().__init__(*args, **kw)
@@ -157,7 +169,7 @@ def cli(verbose, quiet):
     level = logging.ERROR if quiet else {0: logging.WARNING, 1: logging.INFO}.get(verbose, logging.DEBUG)
     # -v and -vv speak for tiremodal's own loggers; other libraries (matplotlib, h5py, dask)
     # say only their warnings (errors with -q), never their info or debug chatter
-    handler = logging.StreamHandler(sys.stderr)
+    handler = _Stderr()
     handler.setFormatter(logging.Formatter("tiremodal: %(levelname)s: %(message)s"))
     own = logging.getLogger("tiremodal_cli")
     own.handlers[:] = [handler]
