@@ -20,11 +20,12 @@ import os
 import shutil
 import tempfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from . import __version__, names
+from . import names
 from .errors import DataFormatError
 from .files import _UMASK, install_dir, write_text_atomic
 from .pipeline import MANIFEST, read_manifest, verify_manifest
@@ -281,19 +282,41 @@ def _gif_grid(gifs: list[tuple[str, bytes]]) -> str:
     return f'<div class="gifs">{cells}</div>'
 
 
-def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict, gifs=()) -> str:
-    s = man["summary"]
-    cap = dict(FIGURES)
-    fig = (lambda k: _img(pngs[k], cap[k]))
-    p_kpa = None if s.get("inflation_pressure") is None else s["inflation_pressure"] / 1e3
-    facts = _test_facts(man)
+@dataclass(frozen=True)
+class _RunPage:
+    """What every section of a run's page reads: the folder, its manifest and JSON outputs,
+    the rendered figures (PNG bytes by stem) and the mode animations."""
+
+    folder: Path
+    man: dict
+    ident: dict
+    diag: dict
+    pngs: dict
+    gifs: tuple = ()
+
+    @property
+    def summary(self) -> dict:
+        return self.man["summary"]
+
+    def fig(self, stem: str) -> str:
+        return _img(self.pngs[stem], dict(FIGURES)[stem])
+
+
+def _head(p: _RunPage) -> list[str]:
+    s = p.summary
     out = [f"<h1>Modal test report — {_e(Path(s['measurement']).name)}</h1>",
            f"<p><b>Diagnosis:</b> {_e(_in_words(s['verdict']))}</p>"]
     if s.get("starts_at") == "lsce":
         out.append("<p><b>Input:</b> FRFs from another system (UFF 58): the pipeline started at lsce. "
                    "There were no time records, so no hit checks, no windows and no force spectrum here; "
                    "the FRFs are the other system's, taken to SI as stated below.</p>")
-    out += ["<h2>Test</h2>", _table([{"k": k, "v": v} for k, v in facts], [("k", ""), ("v", "")], left=("k", "v"))]
+    return out
+
+
+def _test_section(p: _RunPage) -> list[str]:
+    s = p.summary
+    out = ["<h2>Test</h2>", _table([{"k": k, "v": v} for k, v in _test_facts(p.man)], [("k", ""), ("v", "")],
+                                   left=("k", "v"))]
     rej = s.get("rejected_hits") or []
     out.append(f"<h2>Rejected hits ({len(rej)})</h2>")
     out.append(_table([{**x, "point": _one_based(x.get("point")), "hit": _one_based(x.get("hit"))} for x in rej],
@@ -301,56 +324,83 @@ def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict, gifs
                       left=("channel", "reason")) if rej else
                "<p>Not checked: the input holds FRFs, not hits.</p>" if s.get("starts_at") == "lsce" else
                "<p>None: every hit passed the checks.</p>")
-    out += ["<h2>FRFs and coherence</h2>", fig("frf"), "<h2>Stabilization diagram</h2>", fig("stabilization")]
-    modes = _modes_rows(folder)
-    out += ["<h2>Modal table</h2>", _table(modes, [("mode", "mode"), ("frequency_hz", "f [Hz]"),
-                                                   ("damping_pct", "ζ [%]"), ("n", "n"), ("branch", "branch"),
-                                                   ("n_confidence", "n conf."), ("mpc", "MPC"),
-                                                   ("frequency_uncertainty_hz", "σf [Hz]")], left=("branch",))]
-    out += ["<h2>MAC matrix</h2>", fig("mac"), "<h2>Mode shapes</h2>", fig("shapes")]
-    if gifs:
+    return out
+
+
+def _modes_section(p: _RunPage) -> list[str]:
+    out = ["<h2>FRFs and coherence</h2>", p.fig("frf"), "<h2>Stabilization diagram</h2>", p.fig("stabilization")]
+    out += ["<h2>Modal table</h2>", _table(_modes_rows(p.folder),
+                                           [("mode", "mode"), ("frequency_hz", "f [Hz]"), ("damping_pct", "ζ [%]"),
+                                            ("n", "n"), ("branch", "branch"), ("n_confidence", "n conf."),
+                                            ("mpc", "MPC"), ("frequency_uncertainty_hz", "σf [Hz]")],
+                                           left=("branch",))]
+    out += ["<h2>MAC matrix</h2>", p.fig("mac"), "<h2>Mode shapes</h2>", p.fig("shapes")]
+    if p.gifs:
         out += ["<h3>The modes moving</h3>",
                 "<p>Each mode over one period: tread (blue), sidewall (red) and rim (grey) displaced radially "
                 "by Re(φ e<sup>iωt</sup>), the largest displacement drawn at a fifth of the radius.</p>",
-                _gif_grid(gifs)]
-    out += ["<h2>Measured against synthesised FRFs</h2>", fig("synthesis")]
+                _gif_grid(p.gifs)]
+    return out + ["<h2>Measured against synthesised FRFs</h2>", p.fig("synthesis")]
+
+
+def _identification_section(p: _RunPage) -> list[str]:
+    ident = p.ident
     par = [{"name": names.long_label(k), "value": v["value"], "std_error": v["std_error"],
             "rel": 100 * v["std_error"] / abs(v["value"]) if v["value"] else None} for k, v in ident["parameters"].items()]
-    out += ["<h2>Model identification</h2>",
-            f"<p>RMS frequency error {ident['rms_error_pct']:.3f} %, max {ident['max_error_pct']:.3f} % over "
-            f"{len(ident['modes'])} modes.</p>",
-            _table(par, [("name", "parameter"), ("value", "value"), ("std_error", "std. error"), ("rel", "rel. [%]")],
-                   left=("name",))]
+    out = ["<h2>Model identification</h2>",
+           f"<p>RMS frequency error {ident['rms_error_pct']:.3f} %, max {ident['max_error_pct']:.3f} % over "
+           f"{len(ident['modes'])} modes.</p>",
+           _table(par, [("name", "parameter"), ("value", "value"), ("std_error", "std. error"), ("rel", "rel. [%]")],
+                  left=("name",))]
     if ident.get("undetermined"):
         out.append("<p>Not determined by these data: " + "; ".join(f"{_e(k)} ({_e(v)})"
                                                                    for k, v in ident["undetermined"].items()) + "</p>")
-    out += [fig("fit"), fig("convergence")]
-    out += _comparison_html(ident.get("model_comparison"))
+    out += [p.fig("fit"), p.fig("convergence")]
+    return out + _comparison_html(ident.get("model_comparison"))
+
+
+def _diagnosis_section(p: _RunPage) -> list[str]:
+    diag = p.diag
     before, after = diag["residual_before"], diag["residual_after"]
-    out += ["<h2>Residual diagnosis</h2>", f"<p>{_e(_in_words(diag['verdict']))}</p>",
-            _table([{"k": "before", "rms": before["rms_error_pct"], "max": before["max_error_pct"],
-                     "chi2": before["chi2"], "dof": before["dof"], "p": before["p_value"]},
-                    {"k": "after", "rms": after["rms_error_pct"], "max": after["max_error_pct"],
-                     "chi2": after["chi2"], "dof": after["dof"], "p": after["p_value"]}],
-                   [("k", ""), ("rms", "RMS error [%]"), ("max", "max error [%]"), ("chi2", "χ²"), ("dof", "dof"),
-                    ("p", "p")], left=("k",)),
-            fig("residuals"), "<h3>Candidates</h3>",
-            _table([{**c, "name": f"{names.effect_title(c['name'])} ({c['name']})",
-                     "adopted": "yes" if c["adopted"] else ""} for c in diag["candidates"]],
-                   [("name", "candidate"), ("round", "round"), ("rms_error_pct", "RMS [%]"), ("aicc", "ΔAICc"),
-                    ("f_p_value", "F-test p"), ("adopted", "adopted"), ("reason", "reason")],
-                   left=("name", "adopted", "reason"))]
+    out = ["<h2>Residual diagnosis</h2>", f"<p>{_e(_in_words(diag['verdict']))}</p>",
+           _table([{"k": "before", "rms": before["rms_error_pct"], "max": before["max_error_pct"],
+                    "chi2": before["chi2"], "dof": before["dof"], "p": before["p_value"]},
+                   {"k": "after", "rms": after["rms_error_pct"], "max": after["max_error_pct"],
+                    "chi2": after["chi2"], "dof": after["dof"], "p": after["p_value"]}],
+                  [("k", ""), ("rms", "RMS error [%]"), ("max", "max error [%]"), ("chi2", "χ²"), ("dof", "dof"),
+                   ("p", "p")], left=("k",)),
+           p.fig("residuals"), "<h3>Candidates</h3>",
+           _table([{**c, "name": f"{names.effect_title(c['name'])} ({c['name']})",
+                    "adopted": "yes" if c["adopted"] else ""} for c in diag["candidates"]],
+                  [("name", "candidate"), ("round", "round"), ("rms_error_pct", "RMS [%]"), ("aicc", "ΔAICc"),
+                   ("f_p_value", "F-test p"), ("adopted", "adopted"), ("reason", "reason")],
+                  left=("name", "adopted", "reason"))]
     if diag.get("unexplained_modes"):
         out += ["<h3>Modes no (n, branch) explains</h3>",
                 _table(diag["unexplained_modes"], [("frequency_hz", "f [Hz]"), ("n", "n"), ("reason", "reason")],
                        left=("reason",))]
-    preds = diag["predictions"]["augmented"]
-    out += ["<h2>Predictions</h2>", fig("predictions"),
-            _table(_predictions_rows(preds, diag["modes"]),
+    return out
+
+
+def _predictions_section(p: _RunPage) -> list[str]:
+    preds = p.diag["predictions"]["augmented"]
+    return ["<h2>Predictions</h2>", p.fig("predictions"),
+            _table(_predictions_rows(preds, p.diag["modes"]),
                    [("n", "n"), ("branch", "branch"), ("model_hz", "model [Hz]"), ("std_hz", "σ [Hz]"),
                     ("measured", "measured [Hz]")], left=("branch",)),
-            "<h2>Parameter sensitivity</h2>", fig("sensitivity")]
-    return "\n".join(out)
+            "<h2>Parameter sensitivity</h2>", p.fig("sensitivity")]
+
+
+#: The sections of a run's page, in order: each a function of :class:`_RunPage` returning
+#: HTML parts. A new section (e.g. the modes the diagnosis set aside, or the verdict's
+#: uncertainty) is one function added here; the provenance footer follows the last.
+SECTIONS = (_head, _test_section, _modes_section, _identification_section, _diagnosis_section,
+            _predictions_section)
+
+
+def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict, gifs=()) -> str:
+    page = _RunPage(folder, man, ident, diag, pngs, tuple(gifs))
+    return "\n".join(part for section in SECTIONS for part in section(page))
 
 
 def _in_words(text: str) -> str:
