@@ -168,15 +168,14 @@ def cli(verbose, quiet):
     """
     level = logging.ERROR if quiet else {0: logging.WARNING, 1: logging.INFO}.get(verbose, logging.DEBUG)
     # -v and -vv speak for tiremodal's own loggers; other libraries (matplotlib, h5py, dask)
-    # say only their warnings (errors with -q), never their info or debug chatter
-    handler = _Stderr()
-    handler.setFormatter(logging.Formatter("tiremodal: %(levelname)s: %(message)s"))
-    own = logging.getLogger("tiremodal_cli")
-    own.handlers[:] = [handler]
-    own.setLevel(level)
-    own.propagate = False
+    # say only their warnings (errors with -q), never their info or debug chatter. One
+    # handler on the root, as logging.basicConfig would add (none when the host program,
+    # e.g. a test runner, has its own).
+    logging.getLogger("tiremodal_cli").setLevel(level)
     root = logging.getLogger()
     root.setLevel(logging.ERROR if quiet else logging.WARNING)
     if not root.handlers:
+        handler = _Stderr()
+        handler.setFormatter(logging.Formatter("tiremodal: %(levelname)s: %(message)s"))
         root.addHandler(handler)
     click.get_current_context().obj = {"quiet": quiet, "verbose": verbose}
