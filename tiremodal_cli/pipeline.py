@@ -472,7 +472,9 @@ def read_uff_test(paths, mapping=None):
             "inflation_pressure": None if pressure is None else float(pressure),
             "n_points": int(r.point_angle.size), "n_hits": None, "sample_rate": None, "starts_at": "lsce",
             "frf_source": {"kind": "UFF 58 FRFs", "files": [str(p) for p in paths], **u,
-                           "mapping": None if mapping is None else str(mapping)}}
+                           "mapping": None if mapping is None else str(mapping),
+                           "options_not_used": "frf_top, exp_end and form: the FRFs are the file's, in its "
+                                               "form, with whatever window it applied (no time records)"}}
     return r, meta
 
 

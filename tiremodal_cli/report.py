@@ -440,6 +440,8 @@ def _test_facts(man: dict) -> list[tuple[str, object]]:
                                 f"({src['form']}); from {src['from']}"),
                   ("point angles from", src["geometry"]),
                   ("sign flipped (negative direction code)", ", ".join(src["sign_flipped"]) or "none")]
+        if src.get("options_not_used"):
+            facts.append(("options not used", src["options_not_used"]))
         if src.get("header"):
             facts.append(("file header (UFF 151)", "; ".join(f"{k}: {v}" for k, v in src["header"].items() if v)))
     else:
