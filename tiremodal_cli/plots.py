@@ -20,7 +20,8 @@ __all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_sh
            "plot_dispersion", "plot_convergence", "plot_sensitivity", "plot_residuals", "plot_campaign_parameters",
            "plot_campaign_frequencies", "stabilization_figure", "automac_figure", "synthesis_figure", "mode_labels",
            "stabilization_grid",
-           "animate_mode", "mode_gif"]
+           "animate_mode", "mode_gif", "mode_gifs",
+           "iter_mode_gifs"]
 
 
 def save_figure(fig, path, *, overwrite: bool = False) -> None:
@@ -475,12 +476,13 @@ def synthesis_figure(table, r, *, points=None, n_channels: int = 2):
 
 
 def _mode_figure(shapes, k, frames, exaggeration, size_in):
-    """The figure of one moving mode and its frame-drawing function (``draw(i)``)."""
+    """The figure of one moving mode, its frame-drawing function (``draw(i)``) and a function
+    that turns the same figure to another mode (``set_mode(k)``: data, scale and title)."""
     fig, ax = plt.subplots(figsize=(size_in, size_in))
     rings = list(dict.fromkeys(shapes.ring))
     r_max = float(np.max(np.hypot(shapes.xyz_m[:, 0], shapes.xyz_m[:, 1])))
     colors = {"tread": "tab:blue", "sidewall": "tab:red", "rim": "0.3"}
-    lines, data = [], []
+    lines, geo = [], []
     for ring in rings:
         sel = np.flatnonzero(np.array(shapes.ring) == ring)
         order = sel[np.argsort(np.mod(shapes.angle_rad[sel], 2 * np.pi))]
@@ -490,26 +492,32 @@ def _mode_figure(shapes, k, frames, exaggeration, size_in):
         ax.plot(rad_c * np.cos(th_c), rad_c * np.sin(th_c), color="0.85", lw=0.8)
         (ln,) = ax.plot([], [], color=colors.get(ring, "k"), lw=1.5, marker=".", ms=3, label=ring)
         lines.append(ln)
-        data.append((th_c, rad_c, np.append(shapes.radial[k, order], shapes.radial[k, order[0]])))
-    peak = max(np.max(np.abs(d[2])) for d in data) or 1.0
-    scale = exaggeration * r_max / peak
+        geo.append((th_c, rad_c, np.append(order, order[0])))
     lim = 1.25 * r_max
     ax.set_xlim(-lim, lim)
     ax.set_ylim(-lim, lim)
     ax.set_aspect("equal")
     ax.axis("off")
-    ax.set_title(f"{shapes.frequency_hz[k]:.1f} Hz  {shapes.label[k]}", fontsize=8)
+    title = ax.set_title("", fontsize=8)
     ax.legend(fontsize=6, loc="lower right", frameon=False)
     fig.subplots_adjust(left=0.02, right=0.98, bottom=0.02, top=0.9)  # (tight_layout: 4x slower, same look)
+    state = {}
+
+    def set_mode(k):
+        phis = [shapes.radial[k, idx] for _, _, idx in geo]
+        peak = max(np.max(np.abs(p)) for p in phis) or 1.0
+        state.update(phis=phis, scale=exaggeration * r_max / peak)
+        title.set_text(f"{shapes.frequency_hz[k]:.1f} Hz  {shapes.label[k]}")
 
     def draw(i):
         rot = np.exp(2j * np.pi * i / frames)
-        for ln, (th, rad, phi) in zip(lines, data):
-            rr = rad + scale * np.real(phi * rot)
+        for ln, (th, rad, _), phi in zip(lines, geo, state["phis"]):
+            rr = rad + state["scale"] * np.real(phi * rot)
             ln.set_data(rr * np.cos(th), rr * np.sin(th))
         return lines
 
-    return fig, draw
+    set_mode(k)
+    return fig, draw, set_mode
 
 
 def animate_mode(shapes, k: int, *, frames: int = 16, exaggeration: float = 0.2, size_in: float = 2.4):
@@ -520,31 +528,65 @@ def animate_mode(shapes, k: int, *, frames: int = 16, exaggeration: float = 0.2,
     report use :func:`mode_gif`."""
     from matplotlib.animation import FuncAnimation
 
-    fig, draw = _mode_figure(shapes, k, frames, exaggeration, size_in)
+    fig, draw, _ = _mode_figure(shapes, k, frames, exaggeration, size_in)
     return FuncAnimation(fig, draw, frames=frames, blit=True)
 
 
-def mode_gif(shapes, k: int, *, frames: int = 12, exaggeration: float = 0.2, size_in: float = 2.4,
-             dpi: int = 60, fps: int = 12) -> bytes:
-    """One mode shape moving (as :func:`animate_mode`) as the bytes of a looping GIF
-    (Pillow, an adaptive palette: a few tens of kB a mode at the defaults)."""
+def iter_mode_gifs(shapes, modes=None, *, frames: int = 12, exaggeration: float = 0.2, size_in: float = 2.4,
+                   dpi: int = 60, fps: int = 12):
+    """Each mode shape moving (as :func:`animate_mode`) as the bytes of a looping GIF
+    (Pillow, an adaptive palette: a few tens of kB a mode at the defaults).
+
+    Parameters
+    ----------
+    shapes : tiremodal_cli.export.ShapeSet
+    modes : sequence of int, optional — which modes (default: all)
+    frames : frames over one period ; exaggeration : largest displacement / tread radius
+    size_in, dpi : figure size (inches) and resolution ; fps : frames per second
+
+    Yields
+    ------
+    bytes, one GIF per mode, in order. One figure is drawn for all of them and each frame
+    redraws only the moving rings (blitting): about 0.06 s a mode.
+    """
     import io
 
     from PIL import Image
 
-    fig, draw = _mode_figure(shapes, k, frames, exaggeration, size_in)
+    modes = range(shapes.radial.shape[0]) if modes is None else list(modes)
+    if not len(modes):
+        return
+    fig, draw, set_mode = _mode_figure(shapes, modes[0], frames, exaggeration, size_in)
     fig.set_dpi(dpi)
     ax, canvas = fig.axes[0], fig.canvas
-    canvas.draw()  # the still parts once (blitting: each frame redraws only the moving rings)
-    background = canvas.copy_from_bbox(fig.bbox)
-    images = []
-    for i in range(frames):
-        canvas.restore_region(background)
-        for ln in draw(i):
-            ax.draw_artist(ln)
-        rgba = np.asarray(canvas.buffer_rgba())
-        images.append(Image.fromarray(rgba[..., :3]).convert("P", palette=Image.Palette.ADAPTIVE, colors=32))
-    plt.close(fig)
-    buf = io.BytesIO()
-    images[0].save(buf, format="GIF", save_all=True, append_images=images[1:], duration=int(1000 / fps), loop=0)
-    return buf.getvalue()
+    try:
+        for k in modes:
+            set_mode(k)
+            for ln in draw(0):
+                ln.set_visible(False)
+            canvas.draw()  # the still parts and the title (the moving rings hidden)
+            background = canvas.copy_from_bbox(fig.bbox)
+            images = []
+            for i in range(frames):
+                canvas.restore_region(background)
+                for ln in draw(i):
+                    ln.set_visible(True)
+                    ax.draw_artist(ln)
+                rgba = np.asarray(canvas.buffer_rgba())
+                images.append(Image.fromarray(rgba[..., :3]).convert("P", palette=Image.Palette.ADAPTIVE, colors=32))
+            buf = io.BytesIO()
+            images[0].save(buf, format="GIF", save_all=True, append_images=images[1:], duration=int(1000 / fps),
+                           loop=0)
+            yield buf.getvalue()
+    finally:
+        plt.close(fig)
+
+
+def mode_gifs(shapes, modes=None, **kw) -> list[bytes]:
+    """Every mode's GIF as a list (:func:`iter_mode_gifs`, same parameters)."""
+    return list(iter_mode_gifs(shapes, modes, **kw))
+
+
+def mode_gif(shapes, k: int, **kw) -> bytes:
+    """One mode shape moving as the bytes of a looping GIF (:func:`mode_gifs` for one mode)."""
+    return mode_gifs(shapes, [k], **kw)[0]

@@ -260,7 +260,7 @@ def _mode_gifs(folder: Path, figdir: Path) -> list[tuple[str, bytes]]:
     (about 40 kB a mode: a 34-mode report stays well under 10 MB)."""
     from .export import shape_set
     from .modalfile import read_modal
-    from .plots import mode_gif
+    from .plots import mode_gifs
 
     table = read_modal(folder / "modal.h5")
     if table.n_modes == 0 or "tread" not in table.channel_location:
@@ -268,8 +268,7 @@ def _mode_gifs(folder: Path, figdir: Path) -> list[tuple[str, bytes]]:
     s = shape_set(table)
     (figdir / "modes").mkdir()
     out = []
-    for k in range(table.n_modes):
-        gif = mode_gif(s, k)
+    for k, gif in enumerate(mode_gifs(s)):
         (figdir / "modes" / f"mode_{k + 1:02d}.gif").write_bytes(gif)
         out.append((f"mode {k + 1}: {s.frequency_hz[k]:.1f} Hz {s.label[k]}", gif))
     return out
