@@ -133,14 +133,17 @@ def stabilization_grid(table, *, ncols: int = 4, band_hz=None):
             ax.set_xlim(*band_hz)
     for ax in axes.ravel()[len(groups):]:
         ax.set_visible(False)
-    for ax in axes[-1]:
-        ax.set_xlabel("frequency [Hz]", fontsize=8)
+    for i, ax in enumerate(axes.ravel()[:len(groups)]):
+        if i + ncols >= len(groups):  # the lowest panel of its column: frequencies shown
+            ax.tick_params(labelbottom=True)
+            ax.set_xlabel("frequency [Hz]", fontsize=8)
     for ax in axes[:, 0]:
         ax.set_ylabel("model order", fontsize=8)
     handles = [plt.Line2D([], [], marker=m, color=c, ls="none", label=lab) for m, c, lab in _STATUS_STYLE.values()]
     handles.append(plt.Line2D([], [], color="k", lw=0.6, label="adopted mode"))
     fig.legend(handles=handles, loc="upper center", ncol=len(handles), fontsize=8, frameon=False)
-    fig.tight_layout(rect=(0, 0, 1, 1 - 0.45 / fig.get_figheight()))
+    w, h = fig.get_size_inches()  # fixed margins in inches (tight_layout over many panels costs a second)
+    fig.subplots_adjust(left=0.6 / w, right=1 - 0.1 / w, bottom=0.5 / h, top=1 - 0.55 / h, wspace=0.25, hspace=0.45)
     return fig
 
 
