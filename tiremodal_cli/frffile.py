@@ -413,7 +413,12 @@ def read_frf_uff(path, *, channels: dict | None = None, points: dict | None = No
     geo = {}
     have_pts = points and all(str(n) in points for n in ref)
     if nodes and all(n in nodes for n in ref) and len(ref) >= 3:
-        geo = _geometry(nodes, ref, where)
+        try:
+            geo = _geometry(nodes, ref, where)
+        except DataFormatError:
+            if not have_pts:
+                raise
+            geo = {}  # the mapping places the points; the file's odd geometry is not needed
     if have_pts:
         ang, geometry = np.array([points[str(n)] for n in ref], dtype=float), "the mapping's [points]"
     elif geo:
