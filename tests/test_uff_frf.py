@@ -40,7 +40,7 @@ def _common(x, **kw):
     return d
 
 
-def write_testlab_uff(path, r, *, flip="sidewall", geometry=True, header=True):
+def write_testlab_uff(path, r, *, flip="sidewall", geometry=True, header=True, plane="xy", tilt=0.0):
     """Write FRFs ``r`` as Simcenter Testlab exports them: 151 header, 164 units (SI),
     15 nodes (points 101…, sensors 1…), per FRF a dataset 58 in g/N and its coherence;
     the ``flip`` channel mounted pointing −Z (direction −3, values negated)."""
@@ -57,11 +57,13 @@ def write_testlab_uff(path, r, *, flip="sidewall", geometry=True, header=True):
     cn = 1 + np.arange(len(r.channel_name))
     if geometry:
         rr = np.array([RADII[loc] for loc in r.channel_location])
-        x = np.r_[RADII["tread"] * np.cos(r.point_angle), rr * np.cos(r.channel_angle)]
-        y = np.r_[RADII["tread"] * np.sin(r.point_angle), rr * np.sin(r.channel_angle)]
-        k = x.size
+        c = np.r_[RADII["tread"] * np.cos(r.point_angle), rr * np.cos(r.channel_angle)]
+        d = np.r_[RADII["tread"] * np.sin(r.point_angle), rr * np.sin(r.channel_angle)]
+        k = c.size
+        axial = tilt * c  # tilt ≠ 0: the points leave the plane
+        x, y, z = {"xy": (c, d, axial), "zx": (d, axial, c)}[plane]  # zx: the wheel's axis along y
         sets.append(pyuff.prepare_15(node_nums=np.r_[pn, cn], def_cs=np.zeros(k, int), disp_cs=np.zeros(k, int),
-                                     color=np.ones(k, int), x=x, y=y, z=np.zeros(k)))
+                                     color=np.ones(k, int), x=x, y=y, z=z))
     for ic, loc in enumerate(r.channel_location):
         sg = -1 if loc == flip else 1
         for ip in range(pn.size):
@@ -248,3 +250,16 @@ def _band(uff_runs):
 
     with h5py.File(uff_runs["dir"] / "uff" / "modal.h5", "r") as h:
         return json.loads(h.attrs["meta"])["band_hz"]
+
+
+def test_geometry_in_another_plane_and_off_any_plane(tmp_path, exact_sim):
+    """A wheel whose axis is y (the tyre in the ZX plane): the same angles, about that axis.
+    Points that lie in no coordinate plane: one line saying so, and what is allowed."""
+    from tiremodal_cli.frf import FRFOptions, compute_frf
+
+    r = compute_frf(exact_sim.measurement, FRFOptions(band_hz=(0.0, 300.0)))
+    got = read_frf_uff(write_testlab_uff(tmp_path / "zx.uff", r, plane="zx"))
+    np.testing.assert_allclose(np.angle(np.exp(1j * (got.point_angle - r.point_angle))), 0, atol=1e-5)
+    np.testing.assert_allclose(np.angle(np.exp(1j * (got.channel_angle - r.channel_angle))), 0, atol=1e-5)
+    with pytest.raises(DataFormatError, match="do not lie in one coordinate plane"):
+        read_frf_uff(write_testlab_uff(tmp_path / "tilt.uff", r, tilt=0.2))
