@@ -298,7 +298,10 @@ class _RunPage:
         return self.man["summary"]
 
     def fig(self, stem: str) -> str:
-        return _img(self.pngs[stem], dict(FIGURES)[stem])
+        cap = dict(FIGURES)[stem]
+        if stem == "frf" and self.summary.get("starts_at") == "lsce":
+            cap = "FRFs of two impact points with their coherence, as the other system estimated them (in SI)."
+        return _img(self.pngs[stem], cap)
 
 
 def _head(p: _RunPage) -> list[str]:
