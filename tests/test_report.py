@@ -160,7 +160,7 @@ def test_report_predictions_provenance_and_names(sample_run):
     assert man["input_sha256"] in foot and man["created_utc"] in foot and "exp_end = 0.05" in foot
     assert man["command"] in foot or "not recorded" in foot
     for words in ("tread–sidewall radial stiffness per length k_r1 [N/m²]", "tread bending stiffness EI [N·m²]",
-                  "sidewall circumferential (membrane) stiffness"):
+                  "sidewall circumferential (membrane) stiffness", "sidewall membrane tension T_s [N]"):
         assert words in text, words
 
 

@@ -355,7 +355,7 @@ def _identification_section(p: _RunPage) -> list[str]:
            _table(par, [("name", "parameter"), ("value", "value"), ("std_error", "std. error"), ("rel", "rel. [%]")],
                   left=("name",))]
     if ident.get("undetermined"):
-        out.append("<p>Not determined by these data: " + "; ".join(f"{_e(k)} ({_e(v)})"
+        out.append("<p>Not determined by these data: " + "; ".join(f"{_e(names.long_label(k))} ({_e(v)})"
                                                                    for k, v in ident["undetermined"].items()) + "</p>")
     out += [p.fig("fit"), p.fig("convergence")]
     return out + _comparison_html(ident.get("model_comparison"))
@@ -377,6 +377,12 @@ def _diagnosis_section(p: _RunPage) -> list[str]:
                   [("name", "candidate"), ("round", "round"), ("rms_error_pct", "RMS [%]"), ("aicc", "ΔAICc"),
                    ("f_p_value", "F-test p"), ("adopted", "adopted"), ("reason", "reason")],
                   left=("name", "adopted", "reason"))]
+    final = (diag.get("augmented") or {}).get("parameters") or {}
+    if final:
+        out += ["<h3>The final model's parameters</h3>",
+                _table([{"name": names.long_label(k), "value": v.get("value"), "std_error": v.get("std_error")}
+                        for k, v in final.items()],
+                       [("name", "parameter"), ("value", "value"), ("std_error", "std. error")], left=("name",))]
     if diag.get("unexplained_modes"):
         out += ["<h3>Modes no (n, branch) explains</h3>",
                 _table(diag["unexplained_modes"], [("frequency_hz", "f [Hz]"), ("n", "n"), ("reason", "reason")],
