@@ -390,7 +390,11 @@ def provenance() -> dict:
             here = Path(__file__).resolve().parent
             rev = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True,
                                  timeout=5)
-            if rev.returncode == 0:
+            # the package's own files must be tracked there: an installed copy inside some
+            # other repository's tree (a virtualenv in a project) is not that commit
+            tracked = subprocess.run(["git", "-C", str(here), "ls-files", "--error-unmatch", "pipeline.py"],
+                                     capture_output=True, text=True, timeout=5)
+            if rev.returncode == 0 and tracked.returncode == 0:
                 dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
                                        capture_output=True, text=True, timeout=5)
                 _COMMIT = rev.stdout.strip()[:12] + ("+changes" if dirty.stdout.strip() else "")
