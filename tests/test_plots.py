@@ -96,5 +96,6 @@ def test_campaign_repeats_do_not_overplot_and_effects_are_shown():
     assert len(axes) == 2 and "T_s [N]" in axes[1].get_title() and "[N/m²]" in axes[0].get_title()
     x = axes[0].lines[0].get_xdata()
     assert len(set(np.round(x, 9))) == 5  # five tests, five places
-    assert np.all(np.abs(x[:3] - 700) < 200 / 3 + 1e-9) and np.all(np.abs(x[3:] - 900) < 200 / 3 + 1e-9)
+    assert np.all(np.abs(x[:3] - 700) <= 200 / 8 + 1e-9) and np.all(np.abs(x[3:] - 900) <= 200 / 8 + 1e-9)
+    assert list(axes[0].get_xticks()) == [700.0, 900.0]
     plots.plt.close(fig)

@@ -331,11 +331,11 @@ def _campaign_axis(records):
 
 
 def _dodge(x) -> np.ndarray:
-    """Repeats (tests at the same x) spread side by side over ± a third of the smallest gap
-    between distinct x values, so none hides another."""
+    """Repeats (tests at the same x) spread side by side over a quarter of the smallest gap
+    between distinct x values (± 1/8), so none hides another and each stays by its condition."""
     x = np.asarray(x, float)
     u = np.unique(x)
-    width = (np.diff(u).min() if u.size > 1 else 1.0) * 2 / 3
+    width = (np.diff(u).min() if u.size > 1 else 1.0) / 4
     out = x.copy()
     for v in u:
         idx = np.flatnonzero(x == v)
@@ -387,6 +387,8 @@ def plot_campaign_parameters(records):
         ax.grid(True, alpha=0.3)
         if names is not None:
             ax.set_xticks(x, names, rotation=60, ha="right", fontsize=7)
+        elif repeats:
+            ax.set_xticks(np.unique(x))  # the conditions themselves, the repeats around them
     for ax in axes.ravel()[len(params):]:
         ax.set_visible(False)
     fig.suptitle("identified parameters across the tests (± 1 standard error)"
