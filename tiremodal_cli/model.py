@@ -23,6 +23,7 @@ import scipy.linalg
 
 from .effects import Block, resolve_effects
 from .errors import ParameterError
+from .names import PARAMETERS
 
 __all__ = ["TyreParameters", "PAPER_PARAMETERS", "ModalModel", "block", "closed_form_hz",
            "branch_frequencies", "point_mass_pairs", "solve_modes", "observation", "frf", "paper_damping", "FRF_FORMS"]
@@ -57,8 +58,7 @@ class TyreParameters:
     k_r2: float = 4.431e6
     m_w: float | None = None
 
-    UNITS = {"R": "m", "b": "m", "P0": "Pa", "rhoA": "kg/m", "m_s": "kg/m", "EI": "N·m²",
-             "k_r1": "N/m²", "k_r2": "N/m²", "m_w": "kg"}
+    UNITS = {k: u for k, (_, u) in PARAMETERS.items()}  # names and units: tiremodal_cli.names
 
     def __post_init__(self):
         for f in dataclasses.fields(self):
