@@ -1,20 +1,21 @@
 """Figures, kept apart from the computations: each takes a result and returns axes.
 
-Uses matplotlib's object API with the Agg backend (no screen needed).
+Uses matplotlib's object API: every figure is a ``matplotlib.figure.Figure`` on its own Agg
+canvas, made without pyplot, so importing this module changes no global state (a notebook
+keeps its backend) and no screen is needed.
 """
 
 from __future__ import annotations
 
 import matplotlib
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.ticker import FuncFormatter, MaxNLocator
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from matplotlib.ticker import FuncFormatter, MaxNLocator  # noqa: E402
-
-from . import names as _names  # noqa: E402
-from .files import atomic_path  # noqa: E402
+from . import names as _names
+from .files import atomic_path
 
 __all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_shapes", "plot_synthesis",
            "plot_dispersion", "plot_convergence", "plot_sensitivity", "plot_residuals", "plot_campaign_parameters",
@@ -24,12 +25,18 @@ __all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_sh
            "iter_mode_gifs"]
 
 
+def _subplots(*args, figsize=None, **kw):
+    """pyplot's subplots without pyplot: a Figure on its own Agg canvas, and its axes."""
+    fig = Figure(figsize=figsize)
+    FigureCanvasAgg(fig)
+    return fig, fig.subplots(*args, **kw)
+
+
 def save_figure(fig, path, *, overwrite: bool = False) -> None:
-    """Save a figure atomically (format from the suffix) and close it."""
+    """Save a figure atomically (format from the suffix)."""
     fmt = str(path).rsplit(".", 1)[-1].lower()
     with atomic_path(path, overwrite=overwrite) as tmp:
         fig.savefig(tmp, format=fmt, dpi=120)
-    plt.close(fig)
 
 
 def plot_frf(r, *, points=(0,), channels=None, axes=None):
@@ -47,7 +54,7 @@ def plot_frf(r, *, points=(0,), channels=None, axes=None):
     axes : (3,) array of Axes
     """
     if axes is None:
-        fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8),
+        fig, axes = _subplots(3, 1, sharex=True, figsize=(8, 8),
                                  gridspec_kw={"height_ratios": [3, 1.5, 1]})
     channels = [c for c in (channels or r.channel_name) if c not in r.dead_channels]
     for c in channels:
@@ -96,7 +103,7 @@ def plot_stabilization(table, *, H_freq=None, H_mag=None, ax=None, group=None):
     :func:`stabilization_grid` for one panel per group)
     """
     if ax is None:
-        _, ax = plt.subplots(figsize=(10, 6))
+        _, ax = _subplots(figsize=(10, 6))
     d = table.diagram
     freqs = table.frequency_hz
     if group is not None:
@@ -123,7 +130,7 @@ def stabilization_grid(table, *, ncols: int = 4, band_hz=None):
     if len(groups) <= 1:
         return plot_stabilization(table).figure
     rows = int(np.ceil(len(groups) / ncols))
-    fig, axes = plt.subplots(rows, ncols, figsize=(3.0 * ncols, 1.9 * rows + 0.8), sharex=True, squeeze=False)
+    fig, axes = _subplots(rows, ncols, figsize=(3.0 * ncols, 1.9 * rows + 0.8), sharex=True, squeeze=False)
     for i, (ax, g) in enumerate(zip(axes.ravel(), groups)):
         sel = d[:, 0] == g
         _stab_panel(ax, d[sel], table.frequency_hz[np.asarray(table.group) == g], legend=False)
@@ -139,8 +146,8 @@ def stabilization_grid(table, *, ncols: int = 4, band_hz=None):
             ax.set_xlabel("frequency [Hz]", fontsize=8)
     for ax in axes[:, 0]:
         ax.set_ylabel("model order", fontsize=8)
-    handles = [plt.Line2D([], [], marker=m, color=c, ls="none", label=lab) for m, c, lab in _STATUS_STYLE.values()]
-    handles.append(plt.Line2D([], [], color="k", lw=0.6, label="adopted mode"))
+    handles = [Line2D([], [], marker=m, color=c, ls="none", label=lab) for m, c, lab in _STATUS_STYLE.values()]
+    handles.append(Line2D([], [], color="k", lw=0.6, label="adopted mode"))
     fig.legend(handles=handles, loc="upper center", ncol=len(handles), fontsize=8, frameon=False)
     w, h = fig.get_size_inches()  # fixed margins in inches (tight_layout over many panels costs a second)
     fig.subplots_adjust(left=0.6 / w, right=1 - 0.1 / w, bottom=0.5 / h, top=1 - 0.55 / h, wspace=0.25, hspace=0.45)
@@ -157,7 +164,7 @@ def plot_mac(M, *, labels_a=None, labels_b=None, ax=None, title="MAC"):
     :data:`MAC_VALUES_MAX` modes (colour only beyond)."""
     if ax is None:
         size = max(5, 0.35 * max(M.shape))
-        _, ax = plt.subplots(figsize=(size, size))
+        _, ax = _subplots(figsize=(size, size))
     im = ax.imshow(M, vmin=0, vmax=1, cmap="viridis", origin="upper")
     if max(M.shape) <= MAC_VALUES_MAX:
         for (i, j), v in np.ndenumerate(M):
@@ -180,7 +187,7 @@ def plot_shapes(table, *, modes=None, ncols=6):
     """
     modes = list(range(table.n_modes)) if modes is None else list(modes)
     rows = int(np.ceil(len(modes) / ncols)) or 1
-    fig, axes = plt.subplots(rows, ncols, subplot_kw={"projection": "polar"}, figsize=(2.2 * ncols, 2.4 * rows))
+    fig, axes = _subplots(rows, ncols, subplot_kw={"projection": "polar"}, figsize=(2.2 * ncols, 2.4 * rows))
     axes = np.atleast_1d(axes).ravel()
     locs = list(table.channel_location)
     order = np.argsort(np.mod(table.point_angle, 2 * np.pi))
@@ -217,7 +224,7 @@ def plot_shapes(table, *, modes=None, ncols=6):
 def plot_synthesis(freq_hz, H, H_syn, *, labels=(), ax=None):
     """Measured against synthesised FRF magnitudes. H, H_syn : (k, n_freq) arrays."""
     if ax is None:
-        _, ax = plt.subplots(figsize=(9, 5))
+        _, ax = _subplots(figsize=(9, 5))
     for i in range(H.shape[0]):
         line, = ax.semilogy(freq_hz, np.abs(H[i]), lw=1, label=(labels[i] if i < len(labels) else None))
         ax.semilogy(freq_hz, np.abs(H_syn[i]), "--", color=line.get_color(), lw=1)
@@ -236,7 +243,7 @@ def plot_dispersion(rows, *, measured=(), ax=None):
     measured : dicts with n, branch, measured_hz.
     """
     if ax is None:
-        _, ax = plt.subplots(figsize=(7, 5))
+        _, ax = _subplots(figsize=(7, 5))
     for br, color in (("same", "tab:blue"), ("opposite", "tab:red")):
         r = sorted((x for x in rows if x["branch"] == br), key=lambda x: x["n"])
         if r:
@@ -261,7 +268,7 @@ def plot_dispersion(rows, *, measured=(), ax=None):
 def plot_convergence(history, *, ax=None):
     """Best objective per generation of the evolutionary search (the paper's Fig. 11)."""
     if ax is None:
-        _, ax = plt.subplots(figsize=(6, 4))
+        _, ax = _subplots(figsize=(6, 4))
     g = [h[0] for h in history]
     v = [100 * h[1] for h in history]
     ax.plot(g, v, "-")
@@ -283,7 +290,7 @@ def plot_convergence(history, *, ax=None):
 def plot_sensitivity(ns, branches, S, names, *, ax=None):
     """Normalised sensitivities ∂ln f/∂ln p against n, one line per parameter and branch."""
     if ax is None:
-        _, ax = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+        _, ax = _subplots(1, 2, figsize=(11, 4.5), sharey=True)
     for k, br in enumerate(("same", "opposite")):
         sel = np.asarray(branches) == br
         for j, name in enumerate(names):
@@ -304,7 +311,7 @@ def plot_residuals(modes, *, axes=None):
     Returns the figure.
     """
     if axes is None:
-        fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+        fig, axes = _subplots(1, 2, figsize=(11, 4.5), sharey=True)
     for ax, br in zip(axes, ("same", "opposite")):
         m = sorted((x for x in modes if x["branch"] == br), key=lambda x: x["n"])
         n = [x["n"] for x in m]
@@ -373,7 +380,7 @@ def plot_campaign_parameters(records):
         params += [k for k in (r.get("augmented_parameters") or {}) if "." in k and k not in params]
     ncols = min(max(len(params), 1), 4)
     nrows = int(np.ceil(max(len(params), 1) / ncols))
-    fig, axes = plt.subplots(nrows, ncols, figsize=(4 * ncols, 3.6 * nrows), squeeze=False)
+    fig, axes = _subplots(nrows, ncols, figsize=(4 * ncols, 3.6 * nrows), squeeze=False)
     xd = _dodge(x)
     repeats = xd.size != np.unique(x).size
     for ax, k in zip(axes.ravel(), params):
@@ -403,10 +410,10 @@ def plot_campaign_frequencies(records):
     records : batch records with ``modes`` [{n, branch, frequency_hz}]. Returns the figure.
     """
     ok, x, xlabel, names = _campaign_axis(records)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    fig, axes = _subplots(1, 2, figsize=(11, 4.5), sharey=True)
     for ax, br in zip(axes, ("same", "opposite")):
         keys = sorted({m["n"] for r in ok for m in (r.get("modes") or []) if m["branch"] == br})
-        cmap = plt.get_cmap("viridis", max(len(keys), 2))
+        cmap = matplotlib.colormaps["viridis"].resampled(max(len(keys), 2))
         for i, n in enumerate(keys):
             f = np.array([next((m["frequency_hz"] for m in (r.get("modes") or []) if m["n"] == n
                                 and m["branch"] == br), np.nan) for r in ok], float)
@@ -483,7 +490,7 @@ def synthesis_figure(table, r, *, points=None, n_channels: int = 2):
 def _mode_figure(shapes, k, frames, exaggeration, size_in):
     """The figure of one moving mode, its frame-drawing function (``draw(i)``) and a function
     that turns the same figure to another mode (``set_mode(k)``: data, scale and title)."""
-    fig, ax = plt.subplots(figsize=(size_in, size_in))
+    fig, ax = _subplots(figsize=(size_in, size_in))
     rings = list(dict.fromkeys(shapes.ring))
     r_max = float(np.max(np.hypot(shapes.xyz_m[:, 0], shapes.xyz_m[:, 1])))
     colors = {"tread": "tab:blue", "sidewall": "tab:red", "rim": "0.3"}
@@ -584,7 +591,7 @@ def iter_mode_gifs(shapes, modes=None, *, frames: int = 12, exaggeration: float 
                            loop=0)
             yield buf.getvalue()
     finally:
-        plt.close(fig)
+        fig.clear()
 
 
 def mode_gifs(shapes, modes=None, **kw) -> list[bytes]:

@@ -127,14 +127,11 @@ def _footer(man: dict) -> str:
 
 def _render(fig, folder: Path, stem: str) -> bytes:
     """Save ``fig`` as folder/stem.png and .svg; return the PNG bytes (for embedding)."""
-    import matplotlib.pyplot as plt
-
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100)
     png = buf.getvalue()
     (folder / f"{stem}.png").write_bytes(png)
     fig.savefig(folder / f"{stem}.svg", format="svg")
-    plt.close(fig)
     return png
 
 
