@@ -85,8 +85,11 @@ def test_undeclared_effect_is_found_and_closes_the_loop(name, no_effect):
     parameter comes back within 10 % (the cavity: its mode within 1 %)."""
     d = diagnose(pipeline_rows({name: EFFECT_CASES[name]}), NOMINAL, n_points=34)
     assert d.adopted == (name,)
-    if name == "air_cavity":  # its footprint on the structure is n = 1; its evidence the extra mode
-        assert d.base.max_error_pct > 0.5
+    if name == "air_cavity":
+        # its footprint on the structure is n = 1 (set aside by the robust base fit, or
+        # > 0.5 % off in it); its evidence the extra mode
+        aside = [a for a in d.base_robust.set_aside if a.mode.n == 1]
+        assert aside or d.base.max_error_pct > 0.5
     else:
         assert d.base.rms_error_pct > 3 * no_effect.base.rms_error_pct
     # at the noise level after: the no-effect test's (1.5 ×) or diagnose's frequency noise

@@ -220,6 +220,8 @@ def run_one(job: Job) -> dict:
     """
     from threadpoolctl import threadpool_limits
 
+    from .frffile import uff_function_types
+    from .ingest.uff import uff_files
     from .measurement import write_measurement
 
     t0 = time.perf_counter()
@@ -228,11 +230,16 @@ def run_one(job: Job) -> dict:
     os.chmod(tmp, 0o777 & ~_UMASK)  # mkdtemp makes 0700; give what mkdir would
     try:
         with threadpool_limits(1):
-            meas = job.test.path
-            if job.test.kind != "measurement":
+            meas, mapping = job.test.path, None
+            if job.test.kind == "uff" and 4 in uff_function_types(uff_files([job.test.path])):
+                # FRFs from another system: the test starts at lsce (pipeline.read_uff_test)
+                meas = uff_files([job.test.path])
+                mp = job.test.path / job.config.mapping
+                mapping = mp if mp.is_file() else None
+            elif job.test.kind != "measurement":
                 meas = tmp / "measurement.h5"
                 write_measurement(meas, _read_folder_test(job.test, job.config.mapping))
-            run(meas, tmp, job.config.run, params=job.config.params,
+            run(meas, tmp, job.config.run, params=job.config.params, mapping=mapping,
                 source={"path": str(job.test.path), "kind": job.test.kind, "sha256": job.source_sha256})
         install_dir(tmp, job.outdir, aside=job.partial)
         return record(job.test, "done", outdir=job.outdir, seconds=time.perf_counter() - t0)

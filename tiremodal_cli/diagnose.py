@@ -40,6 +40,7 @@ from .effects import EFFECTS, get_effect
 from .errors import DataFormatError, ParameterError
 from .identify import DEFAULT_BOUNDS, FitOptions, FitResult, MeasuredMode, fit, modes_from_rows, predict_table
 from .model import TyreParameters
+from .robust import RobustFit, robust_fit, with_sigma
 
 __all__ = ["DiagnoseOptions", "Candidate", "Diagnosis", "residual_analysis", "diagnose", "PARAMETER_CANDIDATES",
            "cavity_band_hz", "report", "mode_table", "predictions"]
@@ -65,6 +66,9 @@ class DiagnoseOptions:
     speed_of_sound : m/s, for the cavity band c / (2π r_c)
     cavity_radius : (lo, hi) fractions of the tread radius R the cavity's mean radius
         may take (default 0.4 … 1.0)
+    rim : "clamped" or "free" when the test's rim channel showed it (``run``), else "from
+        parameters"; a rim the data show clamped has no mass or fixture to fit (the
+        candidates m_w and rim_fixture are not tried)
     """
 
     free: tuple[str, ...] = ("k_r1", "k_r2", "EI")
@@ -80,8 +84,11 @@ class DiagnoseOptions:
     speed_of_sound: float = 343.0
     cavity_radius: tuple[float, float] = (0.4, 1.0)
     search: str = "local"
+    rim: str = "from parameters"
 
     def check(self, base: TyreParameters) -> None:
+        if self.rim not in ("clamped", "free", "from parameters"):
+            raise ParameterError(f"rim={self.rim!r}; allowed: clamped, free, from parameters")
         if not 0 < self.noise_floor_pct < 100:
             raise ParameterError(f"noise_floor_pct={self.noise_floor_pct} must be in (0, 100) %")
         if not 0 < self.alpha < 0.5:
@@ -124,6 +131,17 @@ class Candidate:
     signature: str
     fit: FitResult | None = field(default=None, repr=False)
     cavity_mode: dict | None = None
+    #: the candidate's robust fit of every mode, the modes it was judged on (those either
+    #: model keeps), the current model's set-aside modes it brings back, its search bounds
+    robust: RobustFit | None = field(default=None, repr=False)
+    data: tuple = field(default=(), repr=False)
+    brought_back: tuple = ()
+    bounds: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def passes(self) -> bool:
+        """Every test passed (adoptable)."""
+        return self.reason == "passes"
 
 
 @dataclass(frozen=True)
@@ -142,6 +160,8 @@ class Diagnosis:
     skipped_rows: tuple[dict, ...]
     verdict: str
     options: DiagnoseOptions
+    base_robust: RobustFit | None = None
+    augmented_robust: RobustFit | None = None
 
 
 def cavity_band_hz(R: float, opt: DiagnoseOptions) -> tuple[float, float]:
@@ -151,26 +171,25 @@ def cavity_band_hz(R: float, opt: DiagnoseOptions) -> tuple[float, float]:
 
 
 def _with_sigma(modes, opt) -> list[MeasuredMode]:
-    """Each mode's frequency uncertainty: its estimate's scatter (``uncertainty_hz``, from
-    lsce's stabilization) and the floor combined in quadrature, in Hz."""
-    floor = opt.noise_floor_pct / 100
-    return [dataclasses.replace(m, uncertainty_hz=m.frequency_hz * math.hypot(floor, (m.uncertainty_hz or 0.0)
-                                                                              / m.frequency_hz)) for m in modes]
+    return with_sigma(modes, opt.noise_floor_pct)
 
 
 def _sigma_rel(modes) -> np.ndarray:
     return np.array([m.uncertainty_hz / m.frequency_hz for m in modes])
 
 
-def residual_analysis(res: FitResult, modes: list[MeasuredMode], opt: DiagnoseOptions, *, n_extra: int = 0) -> dict:
-    """The residual of a fit against the noise, and its pattern.
+def residual_analysis(rf: RobustFit, opt: DiagnoseOptions, *, n_extra: int = 0) -> dict:
+    """The residual of a robust fit against the noise, and its pattern.
 
-    Returns a dict: per-mode ``z`` (error / σ), ``chi2``, ``dof``, ``p_value`` and
-    ``exceeds_noise`` (χ² test at level ``alpha``), and ``pattern``: per branch the trend
+    Returns a dict: per kept mode ``z`` (error / σ), ``chi2``, ``dof``, ``p_value`` of the
+    kept modes, ``set_aside`` (the modes the fit set aside, each with its reason) and
+    ``exceeds_noise``: the χ² test at level ``alpha`` fails, or a mode was set aside (an
+    outlier at the same level); and ``pattern``: per branch the trend
     of the error with n (slope %/order and its t), the number of sign changes along n,
     isolated outliers (|z| > 3 and > 4 robust deviations from the branch's median), split
     pairs (one (n, branch) measured twice), and a list of plain-language ``findings``.
     """
+    res, modes = rf.fit, list(rf.kept)
     err = np.array([m["error_pct"] for m in res.modes])
     sig = 100 * _sigma_rel(modes)
     z = err / sig
@@ -212,20 +231,26 @@ def residual_analysis(res: FitResult, modes: list[MeasuredMode], opt: DiagnoseOp
     pattern["split_pairs"] = [{"n": n, "branch": b, "frequencies_hz": sorted(f),
                                "splitting_pct": float(100 * (max(f) - min(f)) / np.mean(f))}
                               for (n, b), f in sorted(pairs.items())]
-    pattern["findings"] = _findings(pattern, chi2, dof, p, opt, n_extra)
+    pattern["findings"] = _findings(pattern, chi2, dof, p, opt, n_extra, rf.set_aside)
     return {"modes": [{**m, "sigma_pct": float(s), "z": float(zz)} for m, s, zz in zip(res.modes, sig, z)],
-            "chi2": chi2, "dof": dof, "p_value": p, "exceeds_noise": bool(p < opt.alpha),
+            "chi2": chi2, "dof": dof, "p_value": p, "exceeds_noise": bool(p < opt.alpha or rf.set_aside),
+            "set_aside": [a.to_dict() for a in rf.set_aside], "z_crit": rf.z_crit,
             "rms_error_pct": res.rms_error_pct, "max_error_pct": res.max_error_pct,
             "noise_floor_pct": opt.noise_floor_pct, "pattern": pattern}
 
 
-def _findings(pattern, chi2, dof, p, opt, n_extra) -> list[str]:
+def _findings(pattern, chi2, dof, p, opt, n_extra, set_aside=()) -> list[str]:
     out = []
     if p < opt.alpha:
         out.append(f"the residual exceeds the noise: χ² = {chi2:.1f} on {dof} degrees of freedom (p = {p:.2g})")
     else:
         out.append(f"the residual is at the level of the noise: χ² = {chi2:.1f} on {dof} degrees of freedom "
                    f"(p = {p:.2g})")
+    if set_aside:
+        out.append(f"{len(set_aside)} mode(s) the model cannot represent, set aside: "
+                   + ", ".join(f"n = {a.mode.n} {a.mode.branch} at {a.mode.frequency_hz:.1f} Hz"
+                               + (f" ({a.error_pct:+.1f} %)" if np.isfinite(a.error_pct) else " (no such model mode)")
+                               for a in set_aside))
     for b, e in pattern["branches"].items():
         t = e.get("slope_t")
         if t is not None and abs(t) >= 3:
@@ -327,9 +352,13 @@ def _judge(cand_fit, current, names, modes, opt, bounds, n_tried, evidence_ok=Tr
         return fields, f"no better than an extra parameter buys by chance (F-test p = {p:.2g} ≥ {level:.2g})"
     if not a1 < a0 - 2:
         return fields, f"AICc not lower by more than 2 ({a1 - a0:+.1f})"
-    best_t = max(abs(v["t"]) for v in params.values())
-    if best_t < opt.min_t:
-        return fields, f"its parameter is not significant (|t| = {best_t:.1f} < {opt.min_t})"
+    # a parameter resting on its physical limit (a fraction at 1, a belt stiff beyond what the
+    # modes can see) is determined by that limit; the others must be significant — at least
+    # one of them, the F-test above being the joint test of them all
+    on_limit = [nm for nm in names if (*bounds[nm], False)[2] and params[nm]["value"] >= bounds[nm][1] * 0.999]
+    free_t = [abs(params[nm]["t"]) for nm in names if nm not in on_limit]
+    if not on_limit and max(free_t) < opt.min_t:
+        return fields, f"its parameter is not significant (|t| = {max(free_t):.1f} < {opt.min_t})"
     for nm in names:
         lo, hi, hard = (*bounds[nm], False)[:3]
         v = params[nm]["value"]
@@ -360,8 +389,28 @@ def _num(v):
         return None
 
 
+def usable_modes(rows, opt: DiagnoseOptions, *, min_confidence: float = 0.5, source: str = "", on_empty=None):
+    """The modes a diagnosis fits (split pairs as two members, each with its σ_f), the rows
+    left out, and those of them that fit no structural (n, branch) (the evidence of an air
+    cavity or an alias). No usable mode: DataFormatError (its message from ``on_empty()``
+    when given)."""
+    modes, skipped = modes_from_rows(rows, min_confidence=min_confidence, split_pairs="members", source=source)
+    if not modes:
+        raise DataFormatError(on_empty() if on_empty else
+                              "no usable modes: a diagnosis needs modes with n and branch (same/opposite)")
+    return _with_sigma(modes, opt), skipped, _unexplained_rows(skipped, rows)
+
+
+def base_fit(modes, base_params: TyreParameters, opt: DiagnoseOptions) -> RobustFit:
+    """The base model's robust fit (:func:`tiremodal_cli.robust.robust_fit`): the one base fit
+    of a run, made by ``identify`` and handed to :func:`diagnose`."""
+    opt.check(base_params)
+    return robust_fit(modes, base_params, _fit_opts(opt), alpha=opt.alpha)
+
+
 def diagnose(rows, base_params: TyreParameters = TyreParameters(), opt: DiagnoseOptions = DiagnoseOptions(),
-             *, n_points: int | None = None, min_confidence: float = 0.5, progress=None) -> Diagnosis:
+             *, n_points: int | None = None, min_confidence: float = 0.5, progress=None,
+             base: RobustFit | None = None) -> Diagnosis:
     """Diagnose what a fitted model lacks, from a modal table.
 
     Parameters
@@ -376,110 +425,144 @@ def diagnose(rows, base_params: TyreParameters = TyreParameters(), opt: Diagnose
         for a table without geometry
     min_confidence : rows with a lower ``n_confidence`` fit no (n, branch)
     progress : callable(done, total), optional
+    base : the base model's robust fit of these rows (:func:`base_fit`, as ``run``'s
+        identify stage made it); None: fitted here
 
     Returns
     -------
     Diagnosis
     """
     opt.check(base_params)
-    modes, skipped = modes_from_rows(rows, min_confidence=min_confidence, split_pairs="members")
-    if not modes:
-        raise DataFormatError("no usable modes: a diagnosis needs modes with n and branch (same/opposite)")
-    modes = _with_sigma(modes, opt)
-    extra = _unexplained_rows(skipped, rows)
+    modes, skipped, extra = usable_modes(rows, opt, min_confidence=min_confidence)
+    if base is None:
+        base = base_fit(modes, base_params, opt)
     names = [c for c in (opt.candidates or tuple(EFFECTS) + PARAMETER_CANDIDATES)
              if not (c in PARAMETER_CANDIDATES and c in opt.free)]
     total = 1 + len(names) * max(opt.max_effects, 1)
-    done = [0]
-
-    def tick():
-        done[0] += 1
-        if progress:
-            progress(min(done[0], total), total)
-
-    base = fit(modes, base_params, _fit_opts(opt))
-    tick()
-    current, cur_modes, cur_opt_kw = base, modes, {}
-    adopted, tried, cavity_modes, relabelled = [], [], [], []
-
-    def recheck(current, cur_modes):
-        new_modes, changed = _misreads(current, cur_modes, n_points, opt)
-        if changed:
-            relabelled.extend(changed)
-            current = _refit_current(current, new_modes, opt)
-        return current, new_modes
-    residual_before = residual_analysis(base, modes, opt, n_extra=len(extra))
-    residual_now = residual_before
+    ticks = _Ticker(progress, total)
+    ticks()
+    relabelled = []
+    nominal = {k: float(getattr(base_params, k)) for k in ("k_r1", "k_r2", "EI", "rhoA", "m_s", "b")}
+    current = _recheck(base, n_points, opt, relabelled)
+    adopted, tried, cavity_modes = [], [], []
+    residual_before = residual_analysis(base, opt, n_extra=len(extra))
+    residual_now = residual_analysis(current, opt, n_extra=len(extra)) if current is not base else residual_before
     for rnd in range(1, opt.max_effects + 1):
+        pending = [n for n in names if n not in adopted]
         round_cands = []
-        for name in names:
-            if name in adopted:
-                continue
-            c = _try(name, rnd, current, cur_modes, cur_opt_kw, extra, opt,
-                     n_tried=len([n for n in names if n not in adopted]))
-            round_cands.append(c)
-            tick()
-        if not residual_now["exceeds_noise"]:
-            round_cands = [dataclasses.replace(c, reason="not needed: the residual is at the level of the noise"
-                                               + ("" if c.reason == "passes" else f"; besides, {c.reason}"))
-                           for c in round_cands]
-        passing = [c for c in round_cands if c.reason == "passes"]
-        best = min(passing, key=lambda c: c.delta_aicc) if passing else None
-        for c in round_cands:
-            if c is best:
-                tried.append(dataclasses.replace(c, adopted=True, reason=_adopt_reason(c)))
-            elif c.reason == "passes":
-                tried.append(dataclasses.replace(c, reason=f"passes, but {best.name} explains more "
-                                                            f"(ΔAICc {c.delta_aicc - best.delta_aicc:+.1f} above it)"))
-            else:
-                tried.append(c)
+        for name in pending:
+            round_cands.append(_try(name, rnd, current, extra, opt, n_tried=len(pending), nominal=nominal))
+            ticks()
+        best, judged = _choose(round_cands, current, opt, len(pending), needed=residual_now["exceeds_noise"])
+        tried.extend(judged)
         if best is None:
             break
         adopted.append(best.name)
-        current = best.fit
+        current = best.robust
         if best.cavity_mode is not None:
             # the cavity mode was the evidence; from here on the structure is fitted alone,
             # the cavity fixed at its fitted values
             cavity_modes.append(best.cavity_mode)
-            cur_modes = _modes_for_cavity(cur_modes, best.cavity_mode, opt)[0]
-            keep = tuple(f for f in current.free if not f.startswith(f"{best.name}."))
-            current = _refit_current(dataclasses.replace(current, free=keep), cur_modes, opt)
-        current, cur_modes = recheck(current, cur_modes)
-        cur_opt_kw = {"effects": current.effects, "free": current.free}
-        residual_now = residual_analysis(current, cur_modes, opt, n_extra=len(extra) - len(cavity_modes))
+            struct = [m for m in current.modes if m.branch != "cavity"]
+            keep = tuple(f for f in current.fit.free if not f.startswith(f"{best.name}."))
+            current = _refit_robust(dataclasses.replace(current.fit, free=keep), struct, opt)
+        current = _recheck(current, n_points, opt, relabelled)
+        residual_now = residual_analysis(current, opt, n_extra=len(extra) - len(cavity_modes))
         if not residual_now["exceeds_noise"]:
             break
-    if progress:
-        progress(total, total)
+    ticks.finish()
     explained = {round(c["frequency_hz"], 6) for c in cavity_modes}
     unexplained = tuple(u for u in extra if round(u["frequency_hz"], 6) not in explained)
-    residual_after = residual_now
-    verdict = _verdict(adopted, tried, residual_before, residual_after, unexplained)
-    return Diagnosis(base=base, augmented=current, adopted=tuple(adopted), candidates=tuple(tried),
-                     residual_before=residual_before, residual_after=residual_after, unexplained=unexplained,
+    verdict = _verdict(adopted, tried, residual_before, residual_now, unexplained)
+    return Diagnosis(base=base.fit, augmented=current.fit, adopted=tuple(adopted), candidates=tuple(tried),
+                     residual_before=residual_before, residual_after=residual_now, unexplained=unexplained,
                      cavity_modes=tuple(cavity_modes), relabelled=tuple(relabelled), skipped_rows=tuple(skipped),
-                     verdict=verdict, options=opt)
+                     verdict=verdict, options=opt, base_robust=base, augmented_robust=current)
 
 
-def _misreads(current: FitResult, modes, n_points, opt) -> tuple[list, list]:
-    """Outliers that are a spatial alias of another order, read under the current model.
+class _Ticker:
+    """Progress of the candidate search: ``progress(done, total)`` once per fit."""
 
-    A grid of N points sees order n also as N − n, N + n, …: a mode whose error exceeds
-    5 σ is relabelled to the alias (either branch) the current model puts within 3 σ of
-    it, if that (n, branch) is not measured already. Returns the modes (relabelled) and
-    what was relabelled. Without N (a CSV table) nothing is relabelled.
+    def __init__(self, progress, total):
+        self.progress, self.total, self.done = progress, total, 0
+
+    def __call__(self):
+        self.done += 1
+        if self.progress:
+            self.progress(min(self.done, self.total), self.total)
+
+    def finish(self):
+        if self.progress:
+            self.progress(self.total, self.total)
+
+
+def _choose(cands, current: RobustFit, opt, n_tried, *, needed: bool):
+    """The round's verdicts: the passing candidate with the most evidence over the current
+    model (lowest ΔAICc, each on the modes it was judged on) adopted, the others with the
+    reason they were not.
+
+    Each candidate is judged on the modes either it or the current model keeps; a candidate
+    that brings back a set-aside mode is judged on one mode more. Its ΔAICc is the evidence
+    it has against the current model on its own data, and that is what is compared."""
+    if not needed:
+        return None, [dataclasses.replace(c, reason="not needed: the residual is at the level of the noise"
+                                          + ("" if c.passes else f"; besides, {c.reason}")) for c in cands]
+    passing = [c for c in cands if c.passes]
+    best = min(passing, key=lambda c: c.delta_aicc) if passing else None
+    runner = min((c for c in cands if c is not best and c.delta_aicc is not None), key=lambda c: c.delta_aicc,
+                 default=None)
+    out = []
+    for c in cands:
+        if c is best:
+            out.append(dataclasses.replace(best, adopted=True, reason=_adopt_reason(best, runner)))
+        elif c.passes:
+            out.append(dataclasses.replace(c, reason=f"passes, but {best.name} explains more "
+                                                     f"(ΔAICc {c.delta_aicc - best.delta_aicc:+.1f} above it)"))
+        else:
+            out.append(c)
+    return best, out
+
+
+def _ordered_union(first, *others):
+    seen, out = set(), []
+    for group in (first, *others):
+        for m in group:
+            if m not in seen:
+                seen.add(m)
+                out.append(m)
+    return tuple(out)
+
+
+def _recheck(rf: RobustFit, n_points, opt, relabelled: list) -> RobustFit:
+    """Set-aside modes that are a spatial alias of another order, relabelled and fitted again."""
+    new_modes, changed = _misreads(rf, n_points, opt)
+    if not changed:
+        return rf
+    relabelled.extend(changed)
+    return _refit_robust(rf.fit, new_modes, opt)
+
+
+def _misreads(rf: RobustFit, n_points, opt) -> tuple[list, list]:
+    """Set-aside modes that are a spatial alias of another order, read under the current model.
+
+    A grid of N points sees order n also as N − n, N + n, …: a set-aside mode is relabelled
+    to the alias (either branch) the current model puts within 3 σ of it, if that
+    (n, branch) is not measured already. Returns every mode (relabelled) and what was
+    relabelled. Without N (a CSV table) nothing is relabelled.
     """
-    if not n_points:
+    modes = list(rf.modes)
+    if not n_points or not rf.set_aside:
         return modes, []
     from .identify import model_frequencies
 
+    current = rf.fit
     taken = {(m.n, m.branch) for m in modes}
     out, changed = list(modes), []
-    for i, (m, row) in enumerate(zip(modes, current.modes)):
+    n_max = max(x.n for x in modes) + n_points
+    for a in rf.set_aside:
+        m = a.mode
+        i = modes.index(m)
         sig = m.uncertainty_hz / m.frequency_hz
-        if abs(row["error_pct"]) / 100 <= 5 * sig:
-            continue
-        n_max = max(x.n for x in modes) + n_points
         aliases = sorted({k for j in range(0, n_max // n_points + 2) for k in (j * n_points - m.n, j * n_points + m.n)
                           if 0 <= k <= n_max and k != m.n})
         best = None
@@ -489,8 +572,7 @@ def _misreads(current: FitResult, modes, n_points, opt) -> tuple[list, list]:
                     continue
                 f = model_frequencies(current.parameters, [k], [b], current.effects or None)[0]
                 e = abs(f / m.frequency_hz - 1)
-                ok = e <= 3 * sig or e <= 0.25 * abs(row["error_pct"]) / 100  # the outlier pulls the fit
-                if np.isfinite(f) and ok and (best is None or e < best[2]):
+                if np.isfinite(f) and e <= 3 * sig and (best is None or e < best[2]):
                     best = (k, b, e, f)
         if best is not None:
             k, b, _, f = best
@@ -510,54 +592,135 @@ def _misreads(current: FitResult, modes, n_points, opt) -> tuple[list, list]:
     return out, changed
 
 
-def _adopt_reason(c: Candidate) -> str:
+def _adopt_reason(c: Candidate, runner: Candidate | None) -> str:
     what = "a parameter value is off" if c.kind == "parameter" else "missing physics"
-    return (f"adopted ({what}): RMS {c.rms_error_pct:.3f} %, AICc {c.delta_aicc:+.1f}, F-test p = {c.f_p_value:.2g}, "
-            + ", ".join(f"{k} = {v['value']:.4g} ± {v['std_error']:.2g}" for k, v in c.parameters.items()))
+    s = (f"adopted ({what}): RMS {c.rms_error_pct:.3f} %, ΔAICc {c.delta_aicc:+.1f}, F-test p = {c.f_p_value:.2g}, "
+         + ", ".join(f"{k} = {v['value']:.4g} ± {v['std_error']:.2g}" for k, v in c.parameters.items()))
+    if c.brought_back:
+        s += "; brings back " + ", ".join(f"n = {b['n']} {b['branch']} at {b['frequency_hz']:.1f} Hz"
+                                          for b in c.brought_back)
+    if runner is not None:
+        s += f"; runner-up {runner.name} (ΔAICc {runner.delta_aicc:+.1f})"
+    return s
 
 
-def _try(name, rnd, current, modes, cur_kw, extra, opt, n_tried) -> Candidate:
-    """Refit with one more candidate on top of the current model; judge it."""
-    fixed_effects = dict(cur_kw.get("effects", {}))
-    free = tuple(cur_kw.get("free", opt.free))
+def _try(name, rnd, current: RobustFit, extra, opt, n_tried, nominal=None) -> Candidate:
+    """Refit every mode (the set-aside ones too) with one more candidate on top of the
+    current model, robustly; judge it on the modes either model keeps."""
+    cur = current.fit
+    fixed_effects = dict(cur.effects)
+    free = tuple(cur.free)
     struct_free = tuple(f for f in free if "." not in f)
     prev_eff_free = tuple(tuple(f.split(".", 1)) for f in free if "." in f)
-    start = current.parameters
+    start = cur.parameters
+    if name in ("m_w", "rim_fixture") and opt.rim == "clamped":
+        return Candidate(name=name, parameters={}, rms_error_pct=None, aicc=None, delta_aicc=None, f_p_value=None,
+                         adopted=False, kind="parameter" if name == "m_w" else "structural",
+                         title=f"nominal {name} is off" if name == "m_w" else get_effect(name).title, round=rnd,
+                         signature="", reason="no evidence: the rim channel recorded no signal (a clamped rim)")
     if name in PARAMETER_CANDIDATES:
         lo, hi = DEFAULT_BOUNDS[name]
-        fo = _fit_opts(opt, free=struct_free + (name,), effects=fixed_effects, effect_free=prev_eff_free,
-                       start=_start(current))
-        fo = dataclasses.replace(fo, bounds={})
-        res = fit(modes, start if name != "m_w" or start.m_w is not None else start.replace(m_w=1000.0), fo)
-        fields, why = _judge(res, current, [name], modes, opt, {name: (lo, hi)}, n_tried)
-        return Candidate(name=name, kind="parameter", title=f"nominal {name} is off", round=rnd,
-                         signature="a parameter value is off, not missing physics", adopted=False,
-                         reason=why or "passes", **fields)
+        fo = dataclasses.replace(_fit_opts(opt, free=struct_free + (name,), effects=fixed_effects,
+                                           effect_free=prev_eff_free, start=_start(cur)), bounds={})
+        p0 = start if name != "m_w" or start.m_w is not None else start.replace(m_w=1000.0)
+        return _judged(name, dict(kind="parameter", title=f"nominal {name} is off", round=rnd,
+                                  signature="a parameter value is off, not missing physics"),
+                       current, p0, fo, [name], {name: (lo, hi)}, opt, n_tried)
     eff, fitted, effects = _effect_spec(name, fixed_effects)
     efree = prev_eff_free + tuple((name, p.name) for p in fitted)
     bounds = {f"{name}.{p.name}": (p.lower, p.upper, p.upper_is_physical) for p in fitted}
     pnames = [f"{name}.{p.name}" for p in fitted]
-    common = dict(kind=eff.kind, title=eff.title, round=rnd, signature=eff.signature, adopted=False)
-    if eff.kind == "coupling":
-        pairs = [m for m in modes if m.member]
-        if not pairs:
-            return Candidate(name=name, parameters={}, rms_error_pct=None, aicc=None, delta_aicc=None,
-                             f_p_value=None, reason="no evidence: no split pair in the modal table", **common)
+    common = dict(kind=eff.kind, title=eff.title, round=rnd, signature=eff.signature)
+    if eff.kind == "coupling" and not any(m.member for m in current.modes):
+        return Candidate(name=name, parameters={}, rms_error_pct=None, aicc=None, delta_aicc=None,
+                         f_p_value=None, adopted=False, reason="no evidence: no split pair in the modal table",
+                         **common)
     if eff.kind == "acoustic":
-        return _try_cavity(name, effects, efree, bounds, pnames, current, modes, struct_free, extra, opt,
+        return _try_cavity(name, _CavitySpec(effects, efree, bounds, pnames, struct_free), current, extra, opt,
                            n_tried, common)
-    fo = _fit_opts(opt, free=struct_free, effects=effects, effect_free=efree,
-                   start={**_start(current), **{f"{name}.{p.name}": p.default for p in fitted}})
-    res = fit(modes, start, fo)
-    fields, why = _judge(res, current, pnames, modes, opt, bounds, n_tried)
-    return Candidate(name=name, reason=why or "passes", **fields, **common)
+    if eff.extra.get("needs_free_rim") and start.m_w is None:
+        return Candidate(name=name, parameters={}, rms_error_pct=None, aicc=None, delta_aicc=None,
+                         f_p_value=None, adopted=False,
+                         reason="no evidence: the rim is clamped (its channel recorded no signal, or the "
+                                "parameters say so)", **common)
+    also = tuple(a for a in eff.extra.get("also_free", ()) if a not in struct_free)
+    if also:  # the effect's own parameter and the seed model's that it acts with (the rim mass)
+        struct_free = struct_free + also
+        pnames = pnames + list(also)
+        bounds = {**bounds, **{a: DEFAULT_BOUNDS[a] for a in also}}
+    own = {f"{name}.{p.name}": p.default for p in fitted}
+    fo = _fit_opts(opt, free=struct_free, effects=effects, effect_free=efree, start={**_start(cur), **own},
+                   extra_starts=({**_start(cur), **(nominal or {}), **own},) if nominal else ())
+    return _judged(name, common, current, start, fo, pnames, bounds, opt, n_tried)
+
+
+def _judged(name, common, current: RobustFit, p0, fo, pnames, bounds, opt, n_tried) -> Candidate:
+    """A candidate judged against the current model on the modes the current model keeps
+    plus the set-aside modes the candidate brings back.
+
+    Every mode enters the candidate's fit; those the current model keeps stay in it (the
+    candidate must carry what the current model carries), and a set-aside mode comes back
+    only when the candidate holds it inside the current model's outlier limit with all of
+    them in the fit — a candidate cannot buy a mode back by bending the others."""
+    kept = set(current.kept)
+    rc = robust_fit(_testimony(current), p0, fo, alpha=opt.alpha, scale=current.scale, protect=lambda m: m in kept)
+    data = rc.kept
+    cur = current.fit if set(data) == kept else _aligned(_refit_on(current.fit, data, opt), data)
+    fields, why = _judge(rc.fit, cur, pnames, list(data), opt, bounds, n_tried)
+    back = tuple(a.to_dict() for a in current.set_aside if a.mode in set(rc.kept))
+    return Candidate(name=name, reason=why or "passes", adopted=False, robust=rc, data=tuple(data),
+                     brought_back=back, bounds=bounds, **fields, **common)
+
+
+def _testimony(current: RobustFit) -> list:
+    """The modes a candidate is fitted to: those the current model keeps and the set-aside
+    ones whose order was measured — a set-aside mode above the spatial Nyquist order has its
+    n from the model's own dispersion, not from the points, and cannot testify against the
+    model (it may still be relabelled as an alias, :func:`_misreads`)."""
+    return list(current.kept) + [a.mode for a in current.set_aside if not a.mode.aliased]
+
+
+def _aligned(res: FitResult, data) -> FitResult:
+    """``res`` with its mode table in the order of ``data`` (fits of the same modes in
+    another order)."""
+    key = lambda n, b, f, mem: (n, b, round(f, 9), mem)  # noqa: E731
+    table = {key(m["n"], m["branch"], m["measured_hz"], m.get("member")): m for m in res.modes}
+    rows = [table[key(m.n, m.branch, m.frequency_hz, m.member)] for m in data]
+    return dataclasses.replace(res, modes=rows)
+
+
+def _refit_on(res: FitResult, modes, opt) -> FitResult:
+    """The model of ``res`` (same free parameters and effects) fitted to ``modes``, from ``res``."""
+    o = res.options
+    fo = _fit_opts(opt, free=tuple(f for f in res.free if "." not in f), effects=res.effects,
+                   effect_free=tuple(tuple(f.split(".", 1)) for f in res.free if "." in f), start=_start(res))
+    fo = dataclasses.replace(fo, bounds=o.bounds, search="polish")
+    return fit(list(modes), res.parameters, fo)
+
+
+def _refit_robust(res: FitResult, modes, opt) -> RobustFit:
+    """The model of ``res`` fitted robustly to ``modes`` (relabelled modes, the structure
+    without its cavity mode)."""
+    fo = _fit_opts(opt, free=tuple(f for f in res.free if "." not in f), effects=res.effects,
+                   effect_free=tuple(tuple(f.split(".", 1)) for f in res.free if "." in f), start=_start(res))
+    return robust_fit(list(modes), res.parameters, dataclasses.replace(fo, bounds=res.options.bounds),
+                      alpha=opt.alpha)
+
+
+@dataclass(frozen=True)
+class _CavitySpec:
+    effects: dict
+    efree: tuple
+    bounds: dict
+    pnames: list
+    struct_free: tuple
 
 
 def _modes_for_cavity(modes, cav, opt):
     """The structural modes once ``cav`` is the cavity mode: drop it where it was kept as
     n = 1 and let the row it had displaced (an n = 1 duplicate) take its place."""
     f_c = cav["frequency_hz"]
-    kept = [m for m in modes if not (m.n == 1 and abs(m.frequency_hz - f_c) <= 1e-9 * f_c)]
+    kept = [m for m in modes if not (m.n == 1 and m.branch != "cavity" and abs(m.frequency_hz - f_c) <= 1e-9 * f_c)]
     if len(kept) == len(modes):
         return kept, None
     b = next(m.branch for m in modes if m.n == 1 and abs(m.frequency_hz - f_c) <= 1e-9 * f_c)
@@ -568,58 +731,73 @@ def _modes_for_cavity(modes, cav, opt):
     return kept, b
 
 
-def _try_cavity(name, effects, efree, bounds, pnames, current, modes, struct_free, extra, opt, n_tried,
-                common) -> Candidate:
-    """The air cavity: a mode with an n = 1 tread pattern in the cavity band that fits no
-    structural (n, branch) (or that displaced the structural n = 1 from its label)."""
-    lo, hi = cavity_band_hz(current.parameters.R, opt)
+def _cavity_evidence(current: RobustFit, extra, opt) -> list[dict]:
+    """Modes that may be the cavity's: an n = 1 pattern in the cavity band that fits no
+    structural (n, branch) — or the n = 1 row kept, when the unexplained one is the structure's."""
+    lo, hi = cavity_band_hz(current.fit.parameters.R, opt)
     cands = []
     for u in extra:
         n_ok = u.get("n") == 1 or (u.get("n_spatial") is not None and int(u["n_spatial"]) == 1)
         if n_ok and lo <= u["frequency_hz"] <= hi:
             cands.append({"frequency_hz": u["frequency_hz"], "displaced": None, "row": u.get("row")})
-            # the row kept as n = 1 may be the cavity instead, the unexplained one the structure's
-            for m in modes:
+            for m in current.modes:
                 if m.n == 1 and m.branch == u.get("branch") and lo <= m.frequency_hz <= hi:
                     cands.append({"frequency_hz": m.frequency_hz, "displaced": u["frequency_hz"], "row": None})
+    return cands
+
+
+def _try_cavity(name, spec: _CavitySpec, current: RobustFit, extra, opt, n_tried, common) -> Candidate:
+    """The air cavity: a mode with an n = 1 tread pattern in the cavity band that fits no
+    structural (n, branch) (or that displaced the structural n = 1 from its label)."""
+    lo, hi = cavity_band_hz(current.fit.parameters.R, opt)
+    cands = _cavity_evidence(current, extra, opt)
     if not cands:
         return Candidate(name=name, parameters={}, rms_error_pct=None, aicc=None, delta_aicc=None, f_p_value=None,
+                         adopted=False,
                          reason=f"no evidence: no unexplained n = 1 mode in the cavity band {lo:.0f}–{hi:.0f} Hz",
                          **common)
+    cur = current.fit
     best = None
     for cav in cands:
-        struct, _ = _modes_for_cavity(modes, cav, opt)
-        data = struct + [MeasuredMode(1, "cavity", cav["frequency_hz"], source="cavity mode",
-                                      uncertainty_hz=cav["frequency_hz"] * opt.noise_floor_pct / 100)]
-        eff_start = {**effects, name: {**effects[name], "f_cavity_hz": float(np.clip(cav["frequency_hz"],
-                                                                                    50.0, 400.0))}}
-        fo = _fit_opts(opt, free=struct_free, effects=eff_start, effect_free=efree,
-                       start={**_start(current), **{f"{name}.{k}": v for k, v in eff_start[name].items()}})
-        res = fit(data, current.parameters, fo)
-        # score on the structural modes only (the cavity mode is the evidence, not the fit)
-        struct_res = _restrict(res, len(struct))
-        if best is None or _rss(struct_res, struct) < _rss(best[1], best[3]):
-            best = (cav, struct_res, res, struct)
-    cav, struct_res, res, struct = best
-    cav_err = next(m for m in res.modes if m["branch"] == "cavity")
+        struct, _ = _modes_for_cavity(_testimony(current), cav, opt)
+        cav_mode = MeasuredMode(1, "cavity", cav["frequency_hz"], source="cavity mode",
+                                uncertainty_hz=cav["frequency_hz"] * opt.noise_floor_pct / 100)
+        eff_start = {**spec.effects, name: {**spec.effects[name],
+                                            "f_cavity_hz": float(np.clip(cav["frequency_hz"], 50.0, 400.0))}}
+        fo = _fit_opts(opt, free=spec.struct_free, effects=eff_start, effect_free=spec.efree,
+                       start={**_start(cur), **{f"{name}.{k}": v for k, v in eff_start[name].items()}})
+        kept = set(current.kept)
+        rc = robust_fit(struct + [cav_mode], cur.parameters, fo, alpha=opt.alpha,
+                        protect=lambda m: m.branch == "cavity" or m in kept, scale=current.scale)
+        kept_struct = [m for m in rc.kept if m.branch != "cavity"]
+        score = _rss(_restrict(_aligned(rc.fit, rc.kept), len(kept_struct)), kept_struct) - len(kept_struct)
+        if best is None or score < best[0]:
+            best = (score, cav, rc, struct, cav_mode)
+    _, cav, rc, struct, cav_mode = best
+    kept_struct = [m for m in rc.kept if m.branch != "cavity"]
+    # judged on the structural modes either model keeps, plus the cavity mode as one more point
+    data = _ordered_union([m for m in current.kept if m in set(struct)], kept_struct)
+    cand_all = _refit_on(rc.fit, list(data) + [cav_mode], opt)
+    cand_all = _aligned(cand_all, list(data) + [cav_mode])
+    cav_err = cand_all.modes[-1]
     ok = abs(cav_err["error_pct"]) <= 3 * opt.noise_floor_pct
-    cur_on_struct = current if len(struct) == len(modes) and cav["displaced"] is None else _refit_current(
-        current, struct, opt)
-    # the cavity mode is a measured point too: the current model leaves it at its distance
-    # from its nearest n = 1 mode, the candidate at its own cavity mode's error
+    cur_on = _aligned(_refit_on(cur, data, opt), data)
     from .identify import model_frequencies
 
     f_c = cav["frequency_hz"]
-    near = model_frequencies(cur_on_struct.parameters, [1, 1], ["same", "opposite"], cur_on_struct.effects or None)
+    near = model_frequencies(cur_on.parameters, [1, 1], ["same", "opposite"], cur_on.effects or None)
     e0 = float(np.nanmin(np.abs(near / f_c - 1))) / (opt.noise_floor_pct / 100)
     e1 = cav_err["error_pct"] / opt.noise_floor_pct
-    fields, why = _judge(struct_res, cur_on_struct, pnames, struct, opt, bounds, n_tried, evidence_ok=ok,
+    fields, why = _judge(_restrict(cand_all, len(data)), cur_on, spec.pnames, list(data), opt, spec.bounds, n_tried,
+                         evidence_ok=ok,
                          evidence_why=f"the model's cavity mode misses the measured one by {cav_err['error_pct']:+.2f} %",
                          extra_point=(e0, e1))
-    fields["fit"] = res
+    fields["fit"] = cand_all
     cavity_mode = {"frequency_hz": cav["frequency_hz"], "n": 1, "model_hz": cav_err["model_hz"],
                    "displaced": cav["displaced"], "band_hz": [lo, hi]}
-    return Candidate(name=name, reason=why or "passes", cavity_mode=cavity_mode, **fields, **common)
+    back = tuple(a.to_dict() for a in current.set_aside if a.mode in set(kept_struct))
+    return Candidate(name=name, reason=why or "passes", adopted=False, cavity_mode=cavity_mode, robust=rc,
+                     data=tuple(data), brought_back=back, bounds=spec.bounds, **fields, **common)
 
 
 def _restrict(res: FitResult, k: int) -> FitResult:
@@ -628,14 +806,6 @@ def _restrict(res: FitResult, k: int) -> FitResult:
     e = np.array([m["error_pct"] for m in modes])
     return dataclasses.replace(res, modes=modes, rms_error_pct=float(np.sqrt(np.mean(e**2))),
                                max_error_pct=float(np.max(np.abs(e))))
-
-
-def _refit_current(current: FitResult, modes, opt) -> FitResult:
-    """The current model refitted to another set of structural modes (for a fair comparison)."""
-    names = [f for f in current.free if "." not in f]
-    efree = tuple(tuple(f.split(".", 1)) for f in current.free if "." in f)
-    fo = _fit_opts(opt, free=tuple(names), effects=current.effects, effect_free=efree, start=_start(current))
-    return fit(modes, current.parameters, fo)
 
 
 def _verdict(adopted, tried, before, after, unexplained) -> str:
@@ -709,7 +879,8 @@ def _report(diag, n_max):
     cands = [{"name": c.name, "kind": c.kind, "title": c.title, "round": c.round,
               "score": c.delta_aicc, "aicc": c.aicc, "f_p_value": c.f_p_value,
               "rms_error_pct": c.rms_error_pct, "parameters": c.parameters, "adopted": c.adopted,
-              "reason": c.reason, "signature": c.signature} for c in diag.candidates]
+              "reason": c.reason, "signature": c.signature, "brings_back": list(c.brought_back)}
+             for c in diag.candidates]
     return {
         "verdict": diag.verdict,
         "base": _fit_block(diag.base),
@@ -722,6 +893,10 @@ def _report(diag, n_max):
                               for u in diag.unexplained],
         "cavity_modes": list(diag.cavity_modes),
         "relabelled_modes": list(diag.relabelled),
+        "set_aside_before": list(diag.residual_before.get("set_aside", [])),
+        "set_aside_after": list(diag.residual_after.get("set_aside", [])),
+        "outlier_rule": {"z_crit_before": diag.residual_before.get("z_crit"),
+                         "z_crit_after": diag.residual_after.get("z_crit"), "alpha": diag.options.alpha},
         "residual_before": {k: v for k, v in diag.residual_before.items() if k != "modes"},
         "residual_after": {k: v for k, v in diag.residual_after.items() if k != "modes"},
         "predictions": predictions(diag, n_max),

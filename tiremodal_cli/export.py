@@ -223,7 +223,7 @@ def export_folder(table, outdir, *, fmt: str = "uff", radii_m: dict | None = Non
     outdir : path of the folder to create
     fmt : {"uff", "csv"}
     radii_m : ring radii (m), optional
-    gif : also ``modes/mode_NN.gif``, each mode moving (:func:`tiremodal_cli.plots.mode_gif`)
+    gif : also ``modes/mode_NN.gif``, each mode moving (:func:`tiremodal_cli.plots.iter_mode_gifs`)
     progress : callable(done, total), optional
 
     Returns
@@ -254,12 +254,12 @@ def export_folder(table, outdir, *, fmt: str = "uff", radii_m: dict | None = Non
             (tmp / "shapes.csv").write_text(shapes_csv(s), encoding="utf-8")
             files += ["nodes.csv", "shapes.csv"]
         if gif:
-            from .plots import mode_gif
+            from .plots import iter_mode_gifs
 
             (tmp / "modes").mkdir()
-            for k in range(s.frequency_hz.size):
+            for k, gif in enumerate(iter_mode_gifs(s)):
                 rel = f"modes/mode_{k + 1:02d}.gif"
-                (tmp / rel).write_bytes(mode_gif(s, k))
+                (tmp / rel).write_bytes(gif)
                 files.append(rel)
                 if progress:
                     progress(k + 1, s.frequency_hz.size)

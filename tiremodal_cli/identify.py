@@ -49,6 +49,7 @@ class MeasuredMode:
     uncertainty_hz: float | None = None
     source: str = ""
     member: str | None = None  # "lower"/"upper" member of a split pair kept apart (diagnose)
+    aliased: bool = False  # n above the spatial Nyquist order: read from the dispersion, not the points
 
 
 @dataclass(frozen=True)
@@ -74,7 +75,9 @@ class FitOptions:
         ``x0``; names as in ``free``/``"effect.param"``, missing ones at mid-range)
     search : "global" (differential evolution, then least squares) or "local" (with a
         ``start``: least squares from it, safeguarded by ``safeguard`` generations of the
-        evolutionary search; the refits of ``diagnose``)
+        evolutionary search; the refits of ``diagnose``) or "polish" (with a ``start``: least
+        squares from it alone — a refit after one mode more or less, from the optimum of
+        a safeguarded search of nearly the same modes)
     """
 
     free: tuple[str, ...] = ("k_r1", "k_r2", "EI")
@@ -92,6 +95,11 @@ class FitOptions:
     start: dict = field(default_factory=dict)
     search: str = "global"
     safeguard: int = 15
+    #: more starts of a "local" search, tried when its end has a parameter pinned to a search
+    #: limit (least squares from each; the best end wins): ``diagnose`` adds the nominal
+    #: parameters, so that a candidate whose optimum lies far from the current model's (a
+    #: Timoshenko tread's EI) is still found
+    extra_starts: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -166,8 +174,9 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
         z = get("damping_ratio")
         u = get("frequency_uncertainty_hz")
         sig = get("significance")
+        al = str(get("n_aliased") or "").strip().lower() in ("true", "1")
         kept.setdefault((n, b), []).append((f, None if z is None else float(z), None if u is None else float(u),
-                                            1.0 if sig is None else float(sig), i + 1))
+                                            1.0 if sig is None else float(sig), i + 1, al))
     modes = []
     for (n, b), vals in sorted(kept.items(), key=lambda kv: np.mean([v[0] for v in kv[1]])):
         if len(vals) > 1:
@@ -182,13 +191,14 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
         if split_pairs == "members" and len(vals) == 2:
             for v, member in zip(sorted(vals, key=lambda v: v[0]), ("lower", "upper")):
                 modes.append(MeasuredMode(n, b, v[0], v[1], v[2], source=f"{source} ({member} member of a split pair)",
-                                          member=member))
+                                          member=member, aliased=v[5]))
             continue
         f = float(np.mean([v[0] for v in vals]))
         zs = [v[1] for v in vals if v[1] is not None]
         us = [v[2] for v in vals if v[2] is not None]
         modes.append(MeasuredMode(n, b, f, float(np.mean(zs)) if zs else None, float(np.mean(us)) if us else None,
-                                  source=source if len(vals) == 1 else f"{source} (mean of a split pair)"))
+                                  source=source if len(vals) == 1 else f"{source} (mean of a split pair)",
+                                  aliased=any(v[5] for v in vals)))
     return modes, skipped
 
 
@@ -330,8 +340,8 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
     names, logb = _split_free(opt)
     if len(modes) < len(names):
         raise DataFormatError(f"{len(modes)} usable modes for {len(names)} free parameters; need at least as many")
-    if opt.search not in ("global", "local"):
-        raise ParameterError(f"search={opt.search!r}; allowed: global, local")
+    if opt.search not in ("global", "local", "polish"):
+        raise ParameterError(f"search={opt.search!r}; allowed: global, local, polish")
     if opt.weights not in ("relative", "uncertainty"):
         raise ParameterError(f"weights={opt.weights!r}; allowed: relative, uncertainty")
     if "m_w" in opt.free and base.m_w is None:
@@ -385,8 +395,19 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
     # orders below the smallest standard error a 0.1 % frequency uncertainty allows (at
     # 1e-14 it crawled on for ~30 iterations of no consequence: 85 % of the polish's calls)
     lsq = dict(jac=jac, bounds=(logb[:, 0], logb[:, 1]), x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10)
-    if opt.search == "local" and x0 is not None:
+    if opt.search == "polish" and x0 is not None:
+        x = scipy.optimize.least_squares(residuals, x0, **lsq).x
+    elif opt.search == "local" and x0 is not None:
         x = _local_search(objective_batch, residuals, x0, logb, opt, lsq, history)
+        # a parameter pinned to a search limit is the mark of a search caught in a degenerate
+        # basin (a Timoshenko tread's EI driven to 0): then try the other starts too
+        pinned = np.any((x - logb[:, 0] < 1e-3) | (logb[:, 1] - x < 1e-3))
+        for extra in opt.extra_starts if pinned else ():
+            x1 = np.array([np.log(extra[n]) if extra.get(n, 0) > 0 else x[i] for i, n in enumerate(names)])
+            x1 = np.clip(x1, logb[:, 0] + 1e-9, logb[:, 1] - 1e-9)
+            x1 = scipy.optimize.least_squares(residuals, x1, **lsq).x
+            if objective(x1) < objective(x):
+                x = x1
     else:
         de = scipy.optimize.differential_evolution(
             objective_batch, bounds=list(map(tuple, logb)), popsize=max(1, math.ceil(opt.population / k)),

@@ -128,7 +128,18 @@ def frequency_uncertainty(t: ModalTable) -> np.ndarray:
 
 
 def to_rows(t: ModalTable) -> list[dict]:
-    """One dict per mode (the ``--json`` list; n, branch, pair absent when not a tyre)."""
+    """One dict per mode (the ``--json`` list; n, branch, pair absent when not a tyre).
+
+    Parameters
+    ----------
+    t : ModalTable
+
+    Returns
+    -------
+    list of dict
+        Keys of :data:`COLUMNS` (``frequency_hz`` in Hz, ``damping_ratio`` a fraction …),
+        what ``identify``, ``diagnose`` and :func:`tiremodal_cli.identify.modes_from_rows` read.
+    """
     rows = []
     unc = frequency_uncertainty(t)
     crowds = (t.meta or {}).get("crowds") or []
@@ -164,6 +175,21 @@ def to_csv(t: ModalTable) -> str:
 
 
 def write_modal(path, t: ModalTable, *, input_file: str = "", input_sha256: str = "", overwrite=False):
+    """Write a modal file (layout in the module docstring) atomically.
+
+    Parameters
+    ----------
+    path : path-like
+    t : ModalTable
+    input_file, input_sha256 : str
+        What the table was estimated from (recorded as provenance).
+    overwrite : bool
+        Replace an existing file (else OutputExistsError).
+
+    Returns
+    -------
+    pathlib.Path
+    """
     s = h5py.string_dtype("utf-8")
     with atomic_path(path, overwrite=overwrite) as tmp:
         with h5py.File(tmp, "w") as h:
@@ -224,8 +250,23 @@ def _fill_dead(arr, live, axis, name):
 
 
 def read_modal(path) -> ModalTable:
-    """Read a modal file; the dead channels' shapes, fit errors and synthesis come back as
-    NaN (in the file: the fill value 0 where ``channel_live`` is false)."""
+    """Read a modal file written by :func:`write_modal`; the dead channels' shapes, fit
+    errors and synthesis come back as NaN (in the file: the fill value 0 where
+    ``channel_live`` is false).
+
+    Parameters
+    ----------
+    path : path-like
+
+    Returns
+    -------
+    ModalTable
+
+    Raises
+    ------
+    DataFormatError
+        Not a modal file, an unknown version, a missing dataset or sizes that do not match.
+    """
     where = str(path)
     with open_hdf5(path) as h:
         fmt = _attr_str(h.attrs, "format")

@@ -23,6 +23,7 @@ import scipy.linalg
 
 from .effects import Block, resolve_effects
 from .errors import ParameterError
+from .names import PARAMETERS
 
 __all__ = ["TyreParameters", "PAPER_PARAMETERS", "ModalModel", "block", "closed_form_hz",
            "branch_frequencies", "point_mass_pairs", "solve_modes", "observation", "frf", "paper_damping", "FRF_FORMS"]
@@ -57,8 +58,7 @@ class TyreParameters:
     k_r2: float = 4.431e6
     m_w: float | None = None
 
-    UNITS = {"R": "m", "b": "m", "P0": "Pa", "rhoA": "kg/m", "m_s": "kg/m", "EI": "N·m²",
-             "k_r1": "N/m²", "k_r2": "N/m²", "m_w": "kg"}
+    UNITS = {k: u for k, (_, u) in PARAMETERS.items()}  # names and units: tiremodal_cli.names
 
     def __post_init__(self):
         for f in dataclasses.fields(self):
@@ -278,16 +278,15 @@ def point_mass_pairs(p: TyreParameters, m_a: float, n_max: int, effects=()) -> d
     lo = np.concatenate([[0.0], la[:-1]])
     hi = la.copy()
     a, b = lo.copy(), hi.copy()
-    err = np.seterr(divide="ignore", invalid="ignore")  # a bisection midpoint may hit a pole exactly
-    for _ in range(80):  # h(λ) = λ m_a Σ c²/(λ_r − λ) − 1 rises from −∞ to +∞ in each interval
-        mid = 0.5 * (a + b)
-        h = mid * m_a * np.sum(ca[None, :] / (la[None, :] - mid[:, None]), axis=1) - 1.0
-        a, b = np.where(h < 0, mid, a), np.where(h < 0, b, mid)
-    roots = 0.5 * (a + b)
-    # each root's eigenvector is q_r ∝ c_r / (ω_r² − λ): label it by the mode it is most of
-    share = ca[None, :] / (la[None, :] - roots[:, None]) ** 2
-    dom = np.flatnonzero(active)[np.argmax(np.nan_to_num(share, nan=np.inf), axis=1)]
-    np.seterr(**err)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a bisection midpoint may hit a pole exactly
+        for _ in range(80):  # h(λ) = λ m_a Σ c²/(λ_r − λ) − 1 rises from −∞ to +∞ in each interval
+            mid = 0.5 * (a + b)
+            h = mid * m_a * np.sum(ca[None, :] / (la[None, :] - mid[:, None]), axis=1) - 1.0
+            a, b = np.where(h < 0, mid, a), np.where(h < 0, b, mid)
+        roots = 0.5 * (a + b)
+        # each root's eigenvector is q_r ∝ c_r / (ω_r² − λ): label it by the mode it is most of
+        share = ca[None, :] / (la[None, :] - roots[:, None]) ** 2
+        dom = np.flatnonzero(active)[np.argmax(np.nan_to_num(share, nan=np.inf), axis=1)]
     lower = {}
     for k, r in enumerate(dom):
         if r not in lower or abs(roots[k] - lam[r]) < abs(lower[r] - lam[r]):
@@ -814,19 +813,18 @@ def stacked_point_mass_pairs(n_max: int, p: ParamStack, m_a, effects=()) -> np.n
     a, b = np.where(ok, lo, 0.0), np.where(ok, la, 1.0)
     ma = np.broadcast_to(np.asarray(m_a, dtype=float), (S,))[:, None]
     lafin = np.where(np.isfinite(la), la, 0.0)
-    err = np.seterr(divide="ignore", invalid="ignore")  # a bisection midpoint may hit a pole exactly
     # bisection as point_mass_pairs (Newton steps crawl here: the lower member's root sits
     # next to its pole), stopped once every bracket is down to rounding
-    for _ in range(80):  # h(λ) = λ m_a Σ c²/(λ_r − λ) − 1 rises from −∞ to +∞ in each interval
-        mid = 0.5 * (a + b)
-        h = mid * ma * np.sum(ca[:, None, :] / (lafin[:, None, :] - mid[:, :, None]), axis=2) - 1.0
-        a, b = np.where(h < 0, mid, a), np.where(h < 0, b, mid)
-        if np.all(b - a <= 4 * np.finfo(float).eps * np.abs(b)):
-            break
-    roots = 0.5 * (a + b)  # (S, R): root k of member s (valid where ok)
-    share = ca[:, None, :] / (lafin[:, None, :] - roots[:, :, None]) ** 2
-    dom_act = np.argmax(np.nan_to_num(share, nan=np.inf), axis=2)  # index among the active-sorted modes
-    np.seterr(**err)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a bisection midpoint may hit a pole exactly
+        for _ in range(80):  # h(λ) = λ m_a Σ c²/(λ_r − λ) − 1 rises from −∞ to +∞ in each interval
+            mid = 0.5 * (a + b)
+            h = mid * ma * np.sum(ca[:, None, :] / (lafin[:, None, :] - mid[:, :, None]), axis=2) - 1.0
+            a, b = np.where(h < 0, mid, a), np.where(h < 0, b, mid)
+            if np.all(b - a <= 4 * np.finfo(float).eps * np.abs(b)):
+                break
+        roots = 0.5 * (a + b)  # (S, R): root k of member s (valid where ok)
+        share = ca[:, None, :] / (lafin[:, None, :] - roots[:, :, None]) ** 2
+        dom_act = np.argmax(np.nan_to_num(share, nan=np.inf), axis=2)  # index among the active-sorted modes
     dom = np.take_along_axis(aord, dom_act, 1)  # index in λ order
     dist = np.where((dom[:, :, None] == np.arange(R)[None, None, :]) & ok[:, :, None],
                     np.abs(roots[:, :, None] - lam[:, None, :]), np.inf)  # (S, root, mode)

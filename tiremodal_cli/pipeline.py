@@ -20,12 +20,13 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .diagnose import DiagnoseOptions, diagnose, report
+from .diagnose import DiagnoseOptions, base_fit, diagnose, report, usable_modes
 from .errors import DataFormatError, ParameterError
 from .files import _UMASK, dumps, install_dir, path_lock, refuse_input_as_output, sha256_file, write_text_atomic
 from .frf import FRFOptions, compute_frf
-from .frffile import write_frf
-from .identify import FitOptions, fit, fit_report, modes_from_rows, predict_table
+from .frffile import is_uff, read_frf_uff, write_frf
+from .identify import fit_report, modes_from_rows, predict_table
+from .modalfile import no_usable_modes
 from .measurement import open_measurement
 from .modalfile import to_csv, to_rows, write_modal
 from .model import TyreParameters
@@ -147,13 +148,24 @@ def rim_condition(r, params: TyreParameters) -> tuple[TyreParameters, str]:
                                      f"moves; rim + fixture mass m_w = {m_w:g} kg to start from")
 
 
+def rim_state(how: str) -> str:
+    """The rim condition of :func:`rim_condition`'s sentence as ``diagnose`` takes it:
+    "clamped" or "free" when the rim channel said so, else "from parameters"."""
+    for state in ("clamped", "free"):
+        if how.startswith(f"{state}: the rim channel"):
+            return state
+    return "from parameters"
+
+
 def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyreParameters | None = None,
-        progress=None, source: dict | None = None) -> dict:
+        progress=None, source: dict | None = None, mapping=None) -> dict:
     """Run the whole pipeline on one measurement file; return the summary.
 
     Parameters
     ----------
-    measurement : path of a measurement file (docs/format.md)
+    measurement : path of a measurement file (docs/format.md), or of UFF 58 FRFs (``*.uff``,
+        ``*.unv``; a list for a test in several files): such a test starts at lsce
+        (:func:`read_uff_test`; its units, geometry and flipped channels in the summary)
     outdir : folder for the outputs (created; existing outputs are replaced)
     opt : RunOptions
     params : nominal model parameters (default: the paper's); P0 is replaced by the
@@ -163,32 +175,40 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     source : {"path", "kind", "sha256"} of what the measurement came from when it was
         ingested from a UFF/CSV folder (default: the measurement file itself); recorded in
         the manifest, whose ``source.sha256`` is what a batch compares to skip a done test.
+    mapping : mapping file (TOML/JSON) for UFF FRFs: channels, point angles, ``[test]``
 
     Files inside ``outdir`` refer to each other by name (the folder can be moved).
+
+    Returns
+    -------
+    dict
+        The summary (also ``run.json``'s ``summary``): the test's facts, rejected hits,
+        modes found, identified parameters with standard errors, the diagnosis' verdict,
+        the RMS errors before and after; for UFF FRFs ``starts_at`` and ``frf_source``.
     """
     t0 = time.perf_counter()
-    measurement, outdir = Path(measurement), Path(outdir)
+    outdir = Path(outdir)
+    paths = [Path(p) for p in measurement] if isinstance(measurement, (list, tuple)) else [Path(measurement)]
+    measurement = paths[0]
     params = params or TyreParameters()
     say = progress or (lambda stage: None)
-    say("frf")
-    with open_measurement(measurement) as m:
-        fs = float(m.sample_rate)
-        if opt.band is not None and not opt.band[1] <= opt.frf_top * fs:
-            raise ParameterError(f"band {opt.band[0]:g} … {opt.band[1]:g} Hz: allowed: HI ≤ {opt.frf_top * fs:g} Hz "
-                                 f"(the FRFs' top, {opt.frf_top:g} × the sample rate; Nyquist {fs / 2:g} Hz)")
-        try:
-            r = compute_frf(m, FRFOptions(band_hz=(0.0, opt.frf_top * fs), exp_end=opt.exp_end, form=opt.form))
-        except OSError as exc:
-            raise DataFormatError(f"{measurement}: cannot read the records ({exc}); the file may be truncated") from None
-        force_g = _force_autospectrum(m, r.freq_hz)
-        meta = {"tire": getattr(m, "tire", None), "inflation_pressure": getattr(m, "inflation_pressure", None),
-                "n_points": int(m.n_points), "n_hits": int(m.n_hits), "sample_rate": fs}
+    if all(is_uff(p) for p in paths):
+        say("read FRFs")
+        r, meta = read_uff_test(paths, mapping)
+        force_g = None
+        sha = sha256_file(measurement) if len(paths) == 1 else files_sha256(paths)
+    else:
+        if len(paths) != 1:
+            raise ParameterError("run takes one measurement file, or UFF files of FRFs")
+        say("frf")
+        r, force_g, meta = _frf_stage(measurement, opt)
+        sha = sha256_file(measurement)
     nominal = params
     if opt.pressure_from_file and meta["inflation_pressure"] is not None and float(meta["inflation_pressure"]) > 0:
         params = params.replace(P0=float(meta["inflation_pressure"]))
     params, rim_how = rim_condition(r, params)
-    sha = sha256_file(measurement)
-    source = source or {"path": str(measurement), "kind": "measurement", "sha256": sha}
+    source = source or {"path": str(measurement), "kind": "uff-frf" if meta.get("starts_at") else "measurement",
+                        "sha256": sha}
     write_frf(outdir / "frf.h5", r, input_file=str(source["path"]), input_sha256=sha, overwrite=True)
     say("lsce")
     table, _ = modal_table_from_frf(r, ModalOptions(band_hz=None if opt.band is None else tuple(opt.band)),
@@ -198,20 +218,24 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     write_text_atomic(outdir / "modes.csv", to_csv(table), overwrite=True)
     rows = to_rows(table)
     say("identify")
-    modes, skipped = modes_from_rows(rows, source="modal.h5")
-    if not modes:
-        from .modalfile import no_usable_modes
-
-        raise DataFormatError(no_usable_modes(f"{source['path']} (its modal table)", rows, skipped))
-    res = fit(modes, params, FitOptions(seed=opt.seed))
+    # one base fit per run: the robust fit of the modes that diagnose would make, made here
+    # and handed to it (identify.json, diagnosis.json, run.json and the report hold it)
+    dopt = DiagnoseOptions(seed=opt.seed, noise_floor_pct=opt.noise_floor_pct, max_effects=opt.max_effects,
+                           rim=rim_state(rim_how))
+    modes, skipped, _ = usable_modes(rows, dopt, source="modal.h5", on_empty=lambda: no_usable_modes(
+        f"{source['path']} (its modal table)", rows, modes_from_rows(rows)[1]))
+    base = base_fit(modes, params, dopt)
+    res = base.fit
     # predictions reach the highest measured order and two beyond ("the higher orders")
     n_pred = max([opt.predict_n] + [m["n"] + 2 for m in res.modes])
     ident = fit_report(res, skipped, predict_table(res, n_pred, measured=res.modes))
-    ident["model_comparison"] = _model_comparison(modes, params, res)
+    ident["set_aside"] = [a.to_dict() for a in base.set_aside]
+    ident["outlier_rule"] = {"z_crit": base.z_crit, "scale": base.scale, "alpha": base.alpha,
+                             "rule": "|z − median z| / max(1, 1.4826 MAD z) > Φ⁻¹(1 − α/2N), one mode at a time"}
+    ident["model_comparison"] = _model_comparison(list(base.kept), params, res)
     write_text_atomic(outdir / "identify.json", _json(ident), overwrite=True)
     say("diagnose")
-    diag = diagnose(rows, params, DiagnoseOptions(seed=opt.seed, noise_floor_pct=opt.noise_floor_pct,
-                                                  max_effects=opt.max_effects), n_points=int(table.point_angle.size))
+    diag = diagnose(rows, params, dopt, n_points=int(table.point_angle.size), base=base)
     rep = report(diag, n_pred)
     write_text_atomic(outdir / "diagnosis.json", _json(rep), overwrite=True)
     write_text_atomic(outdir / "sensitivity.json", _json(_sensitivity(diag.augmented, n_pred)), overwrite=True)
@@ -220,6 +244,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
         "rejected_hits": [x.to_dict() for x in r.rejections],
         "modes_found": int(table.n_modes),
         "identified": ident["parameters"], "rms_error_pct": ident["rms_error_pct"],
+        "set_aside_modes": ident["set_aside"],
         "adopted_effects": rep["adopted_effects"], "parameter_off": rep["parameter_off"],
         "rms_before_pct": rep["base"]["rms_error_pct"], "rms_after_pct": rep["augmented"]["rms_error_pct"],
         "augmented_parameters": rep["augmented"]["parameters"],
@@ -227,7 +252,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
         "seconds": time.perf_counter() - t0,
     }
     names = list(OUTPUTS) + ([measurement.name] if measurement.parent.resolve() == outdir.resolve() else [])
-    manifest = {"format": "tiremodal.run", "format_version": 1, "tiremodal_version": __version__,
+    manifest = {"format": "tiremodal.run", "format_version": 1, **provenance(),
                 "input_file": str(source["path"]), "input_sha256": sha, "source": source, "options": opt.to_dict(),
                 "params": nominal.to_dict(), "model_P0": params.P0, "model_m_w": params.m_w,
                 "outputs": {name: sha256_file(outdir / name) for name in names}, "summary": summary}
@@ -249,7 +274,7 @@ def _link_or_copy(src: str, dst: str) -> None:
 
 
 def run_folder(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyreParameters | None = None,
-               progress=None, overwrite: bool = False) -> dict:
+               progress=None, overwrite: bool = False, mapping=None) -> dict:
     """:func:`run` made atomic: the outputs are written into a private folder beside
     ``outdir`` (``.NAME.partial.*``) and the folder is installed whole
     (:func:`~tiremodal_cli.files.install_dir`), under a lock (``.NAME.lock`` beside it).
@@ -259,6 +284,18 @@ def run_folder(measurement, outdir, opt: RunOptions = RunOptions(), *, params: T
     removed by the next run into ``outdir``. Files of the old folder that are not run
     outputs (the measurement itself when it lies there, notes) are carried into the new
     one (hard links where possible); the report's views (report.html, figures/) are not.
+    ``measurement`` may be a UFF file of FRFs (with an optional ``mapping``: see :func:`run`).
+
+    Parameters
+    ----------
+    measurement, outdir, opt, params, progress, mapping : as for :func:`run`
+    overwrite : bool
+        Replace the outputs of an earlier run in ``outdir``.
+
+    Returns
+    -------
+    dict
+        The summary, as :func:`run`.
 
     Raises
     ------
@@ -271,7 +308,8 @@ def run_folder(measurement, outdir, opt: RunOptions = RunOptions(), *, params: T
     from .errors import OutputExistsError
 
     measurement, outdir = Path(measurement), Path(outdir)
-    refuse_input_as_output({"--output": outdir}, {"measurement": measurement})
+    refuse_input_as_output({"--output": outdir}, {"measurement": measurement,
+                                                  **({"--mapping": Path(mapping)} if mapping else {})})
     if outdir.exists() and not outdir.is_dir():
         raise ParameterError(f"--output {str(outdir)!r} exists and is not a folder")
     if not measurement.is_file():
@@ -299,8 +337,9 @@ def run_folder(measurement, outdir, opt: RunOptions = RunOptions(), *, params: T
                 if measurement.resolve().parent == outdir.resolve():
                     meas = tmp / measurement.name
             sha = sha256_file(measurement)
-            summary = run(meas, tmp, opt, params=params, progress=progress,
-                          source={"path": str(measurement), "kind": "measurement", "sha256": sha})
+            kind = "uff-frf" if is_uff(measurement) else "measurement"
+            summary = run(meas, tmp, opt, params=params, progress=progress, mapping=mapping,
+                          source={"path": str(measurement), "kind": kind, "sha256": sha})
             install_dir(tmp, outdir, aside=parent)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
@@ -346,6 +385,116 @@ def _force_autospectrum(m, freq_hz):
         f = np.where(np.isfinite(f), f, 0.0)
         acc += np.sum(np.abs(np.fft.rfft(f, axis=-1)[..., k]) ** 2, axis=0)
     return acc
+
+
+def provenance() -> dict:
+    """When and with what a result is made: UTC time, tiremodal's version and git commit (of
+    the checkout the package runs from; absent when it is not one, e.g. an installed wheel),
+    and the command line (``tiremodal …`` as typed)."""
+    import datetime
+    import shlex
+    import subprocess
+    import sys
+
+    out = {"created_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
+           "tiremodal_version": __version__}
+    global _COMMIT
+    if _COMMIT is None:
+        _COMMIT = ""
+        try:
+            here = Path(__file__).resolve().parent
+            rev = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True,
+                                 timeout=5)
+            # the package's own files must be tracked there: an installed copy inside some
+            # other repository's tree (a virtualenv in a project) is not that commit
+            tracked = subprocess.run(["git", "-C", str(here), "ls-files", "--error-unmatch", "pipeline.py"],
+                                     capture_output=True, text=True, timeout=5)
+            if rev.returncode == 0 and tracked.returncode == 0:
+                dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
+                                       capture_output=True, text=True, timeout=5)
+                _COMMIT = rev.stdout.strip()[:12] + ("+changes" if dirty.stdout.strip() else "")
+        except (OSError, subprocess.SubprocessError):
+            pass
+    if _COMMIT:
+        out["tiremodal_commit"] = _COMMIT
+    argv = list(sys.argv)
+    prog = Path(argv[0]).name if argv else "tiremodal"
+    out["command"] = shlex.join(["tiremodal" if prog in ("tiremodal", "__main__.py") else prog] + argv[1:])
+    return out
+
+
+_COMMIT: str | None = None
+
+
+def _frf_stage(measurement: Path, opt: RunOptions):
+    """The FRF stage of a measurement file: FRFs, the force autospectrum, the test's facts."""
+    with open_measurement(measurement) as m:
+        fs = float(m.sample_rate)
+        if opt.band is not None and not opt.band[1] <= opt.frf_top * fs:
+            raise ParameterError(f"band {opt.band[0]:g} … {opt.band[1]:g} Hz: allowed: HI ≤ {opt.frf_top * fs:g} Hz "
+                                 f"(the FRFs' top, {opt.frf_top:g} × the sample rate; Nyquist {fs / 2:g} Hz)")
+        try:
+            r = compute_frf(m, FRFOptions(band_hz=(0.0, opt.frf_top * fs), exp_end=opt.exp_end, form=opt.form))
+        except OSError as exc:
+            raise DataFormatError(f"{measurement}: cannot read the records ({exc}); the file may be truncated") from None
+        force_g = _force_autospectrum(m, r.freq_hz)
+        meta = {"tire": getattr(m, "tire", None), "inflation_pressure": getattr(m, "inflation_pressure", None),
+                "n_points": int(m.n_points), "n_hits": int(m.n_hits), "sample_rate": fs}
+    return r, force_g, meta
+
+
+def files_sha256(paths) -> str:
+    """SHA-256 of several files: of their names and checksums, sorted (any change counts)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for p in sorted(Path(q) for q in paths):
+        h.update(f"{p.name}\0{sha256_file(p)}\n".encode())
+    return h.hexdigest()
+
+
+def read_uff_test(paths, mapping=None):
+    """A test given as UFF 58 FRFs (another system's): the FRFs in SI and the test's facts.
+
+    The pipeline starts at lsce for such a test: there are no time records, so no hit
+    checks, no window and no force spectrum (the lsce band is every line above 0 Hz unless
+    ``band`` is given, or the file's coherence with a number of averages from the mapping).
+    Point angles come from the mapping's ``[points]`` or the file's dataset 15; neither is
+    an error. Tyre, pressure (Pa) and the number of averages from the mapping's optional
+    ``[test]`` table (``tire``, ``inflation_pressure``, ``n_averages``).
+
+    Returns
+    -------
+    r : FRFResult ; meta : dict (``starts_at`` = "lsce", ``frf_source``: units, factor, geometry)
+    """
+    from dataclasses import replace
+
+    from .config import load_mapping
+    from .ingest import load_channel_map
+
+    chans, points = load_channel_map(mapping) if mapping else ({}, {})
+    test = dict(load_mapping(mapping).get("test", {})) if mapping else {}
+    r = read_frf_uff(paths, channels=chans, points=points, require_geometry=True)
+    if "tread" not in r.channel_location:
+        raise DataFormatError(f"{paths[0]}: no response is on the tread (channels "
+                              f"{', '.join(f'{n}: {loc}' for n, loc in zip(r.channel_name, r.channel_location))}); "
+                              "allowed: a mapping's [channels] with locations, response entity names "
+                              "tread/sidewall/rim, or a dataset 15 node on the points' circle")
+    n_avg = test.get("n_averages")
+    if n_avg is not None:
+        if isinstance(n_avg, bool) or not isinstance(n_avg, int) or n_avg < 1:
+            raise ParameterError(f"{mapping} [test]: n_averages = {n_avg!r}; allowed: an integer ≥ 1")
+        r = replace(r, n_averages=np.full(r.point_angle.size, n_avg))
+    u = {k: v for k, v in r.meta["uff"].items() if k not in ("reference_nodes", "response_dofs", "files")}
+    pressure = test.get("inflation_pressure")
+    meta = {"tire": None if test.get("tire") is None else str(test["tire"]),
+            "inflation_pressure": None if pressure is None else float(pressure),
+            "n_points": int(r.point_angle.size), "n_hits": None, "sample_rate": None, "starts_at": "lsce",
+            "frf_source": {"kind": "UFF 58 FRFs", "files": [str(p) for p in paths], **u,
+                           "mapping": None if mapping is None else str(mapping),
+                           "options_not_used": "frf_top, exp_end and form: the FRFs are the file's, in its "
+                                               "form, with whatever window it applied (no time records)"}}
+    return r, meta
 
 
 def _model_comparison(modes, params: TyreParameters, res) -> dict:

@@ -1,30 +1,42 @@
 """Figures, kept apart from the computations: each takes a result and returns axes.
 
-Uses matplotlib's object API with the Agg backend (no screen needed).
+Uses matplotlib's object API: every figure is a ``matplotlib.figure.Figure`` on its own Agg
+canvas, made without pyplot, so importing this module changes no global state (a notebook
+keeps its backend) and no screen is needed.
 """
 
 from __future__ import annotations
 
 import matplotlib
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.ticker import FuncFormatter, MaxNLocator
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from .files import atomic_path  # noqa: E402
+from . import names as _names
+from .files import atomic_path
 
 __all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_shapes", "plot_synthesis",
            "plot_dispersion", "plot_convergence", "plot_sensitivity", "plot_residuals", "plot_campaign_parameters",
            "plot_campaign_frequencies", "stabilization_figure", "automac_figure", "synthesis_figure", "mode_labels",
-           "animate_mode", "mode_gif"]
+           "stabilization_grid",
+           "animate_mode", "mode_gif", "mode_gifs",
+           "iter_mode_gifs"]
+
+
+def _subplots(*args, figsize=None, **kw):
+    """pyplot's subplots without pyplot: a Figure on its own Agg canvas, and its axes."""
+    fig = Figure(figsize=figsize)
+    FigureCanvasAgg(fig)
+    return fig, fig.subplots(*args, **kw)
 
 
 def save_figure(fig, path, *, overwrite: bool = False) -> None:
-    """Save a figure atomically (format from the suffix) and close it."""
+    """Save a figure atomically (format from the suffix)."""
     fmt = str(path).rsplit(".", 1)[-1].lower()
     with atomic_path(path, overwrite=overwrite) as tmp:
         fig.savefig(tmp, format=fmt, dpi=120)
-    plt.close(fig)
 
 
 def plot_frf(r, *, points=(0,), channels=None, axes=None):
@@ -42,7 +54,7 @@ def plot_frf(r, *, points=(0,), channels=None, axes=None):
     axes : (3,) array of Axes
     """
     if axes is None:
-        fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8),
+        fig, axes = _subplots(3, 1, sharex=True, figsize=(8, 8),
                                  gridspec_kw={"height_ratios": [3, 1.5, 1]})
     channels = [c for c in (channels or r.channel_name) if c not in r.dead_channels]
     for c in channels:
@@ -53,7 +65,7 @@ def plot_frf(r, *, points=(0,), channels=None, axes=None):
             axes[1].plot(r.freq_hz, np.rad2deg(np.angle(r.H[ic, ip])), lw=0.8)
             axes[2].plot(r.freq_hz, r.coherence[ic, ip], lw=0.8)
     units = {"accelerance": "m/s²/N", "mobility": "m/s/N", "receptance": "m/N"}[r.form]
-    axes[0].set_ylabel(f"|{r.estimator}| [{units}]")
+    axes[0].set_ylabel(f"|{r.estimator if r.estimator != 'unknown' else 'H'}| [{units}]")
     axes[1].set_ylabel("phase [°]")
     axes[1].set_yticks([-180, -90, 0, 90, 180])
     axes[2].set_ylabel("coherence")
@@ -69,29 +81,37 @@ _STATUS_STYLE = {0: ("o", "lightgray", "new"), 1: ("x", "tab:orange", "f"), 2: (
                  3: ("s", "tab:blue", "f, shape"), 4: ("+", "tab:green", "stable")}
 
 
-def plot_stabilization(table, *, H_freq=None, H_mag=None, ax=None):
-    """Stabilization diagram: every candidate pole by order, coloured by status; the
-    adopted modes as vertical lines; optionally a mean FRF magnitude behind (right axis).
-
-    table : ModalTable ; H_freq, H_mag : (n_freq,) arrays, optional
-    """
-    if ax is None:
-        _, ax = plt.subplots(figsize=(10, 6))
-    d = table.diagram
-    groups = np.unique(d[:, 0]) if d.size else []
-    # spread the groups' orders apart so every group's sweep is readable
-    offset = {g: i for i, g in enumerate(groups)}
-    o_max = d[:, 1].max() + 2 if d.size else 1
+def _stab_panel(ax, d, freqs, *, legend=False):
     for code, (marker, color, label) in _STATUS_STYLE.items():
         sel = d[:, 4] == code
         if sel.any():
-            y = d[sel, 1] + np.array([offset[g] for g in d[sel, 0]]) * o_max
-            ax.plot(d[sel, 2], y, marker, color=color, ms=3, ls="none", label=label)
-    for f in table.frequency_hz:
-        ax.axvline(f, color="k", lw=0.5, alpha=0.5)
+            ax.plot(d[sel, 2], d[sel, 1], marker, color=color, ms=2.5, ls="none", label=label)
+    for f in freqs:
+        ax.axvline(f, color="k", lw=0.6, alpha=0.6)
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True, nbins=4))
+    if legend:
+        ax.legend(fontsize=7, loc="upper left")
+
+
+def plot_stabilization(table, *, H_freq=None, H_mag=None, ax=None, group=None):
+    """Stabilization diagram of one sweep: every candidate pole by model order, coloured by
+    status; the adopted modes as vertical lines; optionally a mean FRF magnitude behind
+    (right axis).
+
+    table : ModalTable ; H_freq, H_mag : (n_freq,) arrays, optional
+    group : the circumferential order group to draw (default: all poles on one axis; see
+    :func:`stabilization_grid` for one panel per group)
+    """
+    if ax is None:
+        _, ax = _subplots(figsize=(10, 6))
+    d = table.diagram
+    freqs = table.frequency_hz
+    if group is not None:
+        d = d[d[:, 0] == group]
+        freqs = table.frequency_hz[np.asarray(table.group) == group]
+    _stab_panel(ax, d, freqs, legend=True)
     ax.set_xlabel("frequency [Hz]")
-    ax.set_ylabel("model order" + (" (stacked by circumferential order group)" if len(groups) > 1 else ""))
-    ax.legend(fontsize=7, loc="upper left")
+    ax.set_ylabel("model order")
     if H_freq is not None:
         ax2 = ax.twinx()
         ax2.semilogy(H_freq, H_mag, color="0.4", lw=0.8)
@@ -99,15 +119,56 @@ def plot_stabilization(table, *, H_freq=None, H_mag=None, ax=None):
     return ax
 
 
+def stabilization_grid(table, *, ncols: int = 4, band_hz=None):
+    """Small multiples: one stabilization diagram per circumferential order group (the
+    spatial order the FRFs were split into), the adopted modes of that group as lines.
+
+    Returns the figure (one axes for a table without groups).
+    """
+    d = table.diagram
+    groups = [int(g) for g in np.unique(d[:, 0])] if d.size else []
+    if len(groups) <= 1:
+        return plot_stabilization(table).figure
+    rows = int(np.ceil(len(groups) / ncols))
+    fig, axes = _subplots(rows, ncols, figsize=(3.0 * ncols, 1.9 * rows + 0.8), sharex=True, squeeze=False)
+    for i, (ax, g) in enumerate(zip(axes.ravel(), groups)):
+        sel = d[:, 0] == g
+        _stab_panel(ax, d[sel], table.frequency_hz[np.asarray(table.group) == g], legend=False)
+        ax.set_title(f"spatial order {g}" if g >= 0 else "all", fontsize=9)
+        ax.tick_params(labelsize=7)
+        if band_hz is not None:
+            ax.set_xlim(*band_hz)
+    for ax in axes.ravel()[len(groups):]:
+        ax.set_visible(False)
+    for i, ax in enumerate(axes.ravel()[:len(groups)]):
+        if i + ncols >= len(groups):  # the lowest panel of its column: frequencies shown
+            ax.tick_params(labelbottom=True)
+            ax.set_xlabel("frequency [Hz]", fontsize=8)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("model order", fontsize=8)
+    handles = [Line2D([], [], marker=m, color=c, ls="none", label=lab) for m, c, lab in _STATUS_STYLE.values()]
+    handles.append(Line2D([], [], color="k", lw=0.6, label="adopted mode"))
+    fig.legend(handles=handles, loc="upper center", ncol=len(handles), fontsize=8, frameon=False)
+    w, h = fig.get_size_inches()  # fixed margins in inches (tight_layout over many panels costs a second)
+    fig.subplots_adjust(left=0.6 / w, right=1 - 0.1 / w, bottom=0.5 / h, top=1 - 0.55 / h, wspace=0.25, hspace=0.45)
+    return fig
+
+
+#: a MAC image prints its values only up to this many modes (beyond, the numbers overlap at
+#: a readable font size in a page-wide figure: colour only)
+MAC_VALUES_MAX = 12
+
+
 def plot_mac(M, *, labels_a=None, labels_b=None, ax=None, title="MAC"):
-    """A MAC matrix as a heat map with values."""
+    """A MAC matrix as a heat map; its values printed in the cells up to
+    :data:`MAC_VALUES_MAX` modes (colour only beyond)."""
     if ax is None:
         size = max(5, 0.35 * max(M.shape))
-        _, ax = plt.subplots(figsize=(size, size))
+        _, ax = _subplots(figsize=(size, size))
     im = ax.imshow(M, vmin=0, vmax=1, cmap="viridis", origin="upper")
-    if max(M.shape) <= 40:
+    if max(M.shape) <= MAC_VALUES_MAX:
         for (i, j), v in np.ndenumerate(M):
-            ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=5, color="w" if v < 0.6 else "k")
+            ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=7, color="w" if v < 0.6 else "k")
     if labels_a is not None:
         ax.set_yticks(range(len(labels_a)), labels_a, fontsize=6)
     if labels_b is not None:
@@ -126,7 +187,7 @@ def plot_shapes(table, *, modes=None, ncols=6):
     """
     modes = list(range(table.n_modes)) if modes is None else list(modes)
     rows = int(np.ceil(len(modes) / ncols)) or 1
-    fig, axes = plt.subplots(rows, ncols, subplot_kw={"projection": "polar"}, figsize=(2.2 * ncols, 2.4 * rows))
+    fig, axes = _subplots(rows, ncols, subplot_kw={"projection": "polar"}, figsize=(2.2 * ncols, 2.4 * rows))
     axes = np.atleast_1d(axes).ravel()
     locs = list(table.channel_location)
     order = np.argsort(np.mod(table.point_angle, 2 * np.pi))
@@ -163,7 +224,7 @@ def plot_shapes(table, *, modes=None, ncols=6):
 def plot_synthesis(freq_hz, H, H_syn, *, labels=(), ax=None):
     """Measured against synthesised FRF magnitudes. H, H_syn : (k, n_freq) arrays."""
     if ax is None:
-        _, ax = plt.subplots(figsize=(9, 5))
+        _, ax = _subplots(figsize=(9, 5))
     for i in range(H.shape[0]):
         line, = ax.semilogy(freq_hz, np.abs(H[i]), lw=1, label=(labels[i] if i < len(labels) else None))
         ax.semilogy(freq_hz, np.abs(H_syn[i]), "--", color=line.get_color(), lw=1)
@@ -182,7 +243,7 @@ def plot_dispersion(rows, *, measured=(), ax=None):
     measured : dicts with n, branch, measured_hz.
     """
     if ax is None:
-        _, ax = plt.subplots(figsize=(7, 5))
+        _, ax = _subplots(figsize=(7, 5))
     for br, color in (("same", "tab:blue"), ("opposite", "tab:red")):
         r = sorted((x for x in rows if x["branch"] == br), key=lambda x: x["n"])
         if r:
@@ -198,6 +259,7 @@ def plot_dispersion(rows, *, measured=(), ax=None):
                     label=f"measured, {br}")
     ax.set_xlabel("circumferential order n")
     ax.set_ylabel("frequency [Hz]")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     return ax
@@ -206,26 +268,36 @@ def plot_dispersion(rows, *, measured=(), ax=None):
 def plot_convergence(history, *, ax=None):
     """Best objective per generation of the evolutionary search (the paper's Fig. 11)."""
     if ax is None:
-        _, ax = plt.subplots(figsize=(6, 4))
+        _, ax = _subplots(figsize=(6, 4))
     g = [h[0] for h in history]
     v = [100 * h[1] for h in history]
-    ax.semilogy(g, v, "-")
+    ax.plot(g, v, "-")
     ax.set_xlabel("generation")
-    ax.set_ylabel("RMS relative frequency error [%]")
-    ax.grid(True, alpha=0.3)
+    ax.set_ylabel("best RMS frequency error [%]")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    vv = np.asarray(v, float)
+    vv = vv[np.isfinite(vv) & (vv > 0)]
+    if vv.size and vv.max() / vv.min() > 10:  # over a decade: log, numbers written out in full
+        ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda y, _: f"{y:g}"))
+        ax.yaxis.set_minor_formatter(FuncFormatter(lambda y, _: f"{y:g}" if f"{y:g}"[0] in "25" else ""))
+        ax.tick_params(axis="y", which="minor", labelsize=7)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.figure.tight_layout()
     return ax
 
 
 def plot_sensitivity(ns, branches, S, names, *, ax=None):
     """Normalised sensitivities ∂ln f/∂ln p against n, one line per parameter and branch."""
     if ax is None:
-        _, ax = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+        _, ax = _subplots(1, 2, figsize=(11, 4.5), sharey=True)
     for k, br in enumerate(("same", "opposite")):
         sel = np.asarray(branches) == br
         for j, name in enumerate(names):
-            ax[k].plot(np.asarray(ns)[sel], S[sel, j], "o-", ms=3, label=name)
+            ax[k].plot(np.asarray(ns)[sel], S[sel, j], "o-", ms=3, label=_names.long_label(name))
         ax[k].set_title(f"{br} direction")
-        ax[k].set_xlabel("n")
+        ax[k].set_xlabel("circumferential order n")
+        ax[k].xaxis.set_major_locator(MaxNLocator(integer=True))
         ax[k].grid(True, alpha=0.3)
     ax[0].set_ylabel("∂ln f / ∂ln p")
     ax[1].legend(fontsize=8)
@@ -239,7 +311,7 @@ def plot_residuals(modes, *, axes=None):
     Returns the figure.
     """
     if axes is None:
-        fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+        fig, axes = _subplots(1, 2, figsize=(11, 4.5), sharey=True)
     for ax, br in zip(axes, ("same", "opposite")):
         m = sorted((x for x in modes if x["branch"] == br), key=lambda x: x["n"])
         n = [x["n"] for x in m]
@@ -248,6 +320,7 @@ def plot_residuals(modes, *, axes=None):
         ax.plot(n, [x["augmented_error_pct"] for x in m], "x", color="tab:blue", label="augmented model")
         ax.set_title(f"{br} direction")
         ax.set_xlabel("circumferential order n")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         ax.grid(True, alpha=0.3)
     axes[0].set_ylabel("model − measured [%]")
     axes[1].legend(fontsize=8)
@@ -264,27 +337,69 @@ def _campaign_axis(records):
     return ok, np.arange(len(ok), dtype=float), "test", [r["test"] for r in ok]
 
 
-def plot_campaign_parameters(records):
-    """Identified parameters (± 1 standard error) across a batch's tests.
+def _dodge(x) -> np.ndarray:
+    """Repeats (tests at the same x) spread side by side over a quarter of the smallest gap
+    between distinct x values (± 1/8), so none hides another and each stays by its condition."""
+    x = np.asarray(x, float)
+    u = np.unique(x)
+    width = (np.diff(u).min() if u.size > 1 else 1.0) / 4
+    out = x.copy()
+    for v in u:
+        idx = np.flatnonzero(x == v)
+        if idx.size > 1:
+            out[idx] = v + (np.arange(idx.size) - (idx.size - 1) / 2) * width / idx.size
+    return out
 
-    records : batch records (``summary.jsonl``) with ``identified`` {name: {value, std_error}}.
-    Returns the figure.
+
+def _campaign_values(ok, key):
+    """(value, std_error) of a parameter across the tests: the base fit's ``identified``,
+    or for an effect's parameter (``effect.param``) the final model's ``augmented_parameters``."""
+    src = "augmented_parameters" if "." in key else "identified"
+    v, e = [], []
+    for r in ok:
+        d = (r.get(src) or {}).get(key)
+        d = d if isinstance(d, dict) else {"value": d}
+        v.append(np.nan if d.get("value") is None else d["value"])
+        e.append(np.nan if d.get("std_error") is None else d["std_error"])
+    return np.array(v, float), np.array(e, float)
+
+
+def plot_campaign_parameters(records):
+    """Identified parameters (± 1 standard error) across a batch's tests, with the
+    parameters of the effects the diagnosis adopted (final model); repeats at one
+    condition drawn side by side. Names and units from :mod:`tiremodal_cli.names`.
+
+    records : batch records (``summary.jsonl``) with ``identified`` {name: {value, std_error}}
+    and ``augmented_parameters`` (effect parameters as ``effect.param``). Returns the figure.
     """
     ok, x, xlabel, names = _campaign_axis(records)
     params = []
     for r in ok:
         params += [k for k in (r.get("identified") or {}) if k not in params]
-    fig, axes = plt.subplots(1, max(len(params), 1), figsize=(4 * max(len(params), 1), 3.8), squeeze=False)
-    for ax, k in zip(axes[0], params):
-        v = np.array([((r.get("identified") or {}).get(k) or {}).get("value", np.nan) or np.nan for r in ok], float)
-        e = np.array([((r.get("identified") or {}).get(k) or {}).get("std_error", np.nan) or np.nan for r in ok], float)
-        ax.errorbar(x, v, yerr=np.where(np.isfinite(e), e, 0), fmt="o", capsize=3)
-        ax.set_title(k)
+    for r in ok:
+        params += [k for k in (r.get("augmented_parameters") or {}) if "." in k and k not in params]
+    ncols = min(max(len(params), 1), 4)
+    nrows = int(np.ceil(max(len(params), 1) / ncols))
+    fig, axes = _subplots(nrows, ncols, figsize=(4 * ncols, 3.6 * nrows), squeeze=False)
+    xd = _dodge(x)
+    repeats = xd.size != np.unique(x).size
+    for ax, k in zip(axes.ravel(), params):
+        v, e = _campaign_values(ok, k)
+        ax.errorbar(xd, v, yerr=np.where(np.isfinite(e), e, 0), fmt="o", ms=4, capsize=3)
+        title = _names.long_label(k)
+        if "." in k:
+            title = f"{_names.effect_title(k.split('.')[0])}:\n{title}"
+        ax.set_title(title, fontsize=8)
         ax.set_xlabel(xlabel)
         ax.grid(True, alpha=0.3)
         if names is not None:
             ax.set_xticks(x, names, rotation=60, ha="right", fontsize=7)
-    fig.suptitle("identified parameters across the tests (± 1 standard error)")
+        elif repeats:
+            ax.set_xticks(np.unique(x))  # the conditions themselves, the repeats around them
+    for ax in axes.ravel()[len(params):]:
+        ax.set_visible(False)
+    fig.suptitle("identified parameters across the tests (± 1 standard error)"
+                 + ("; repeats side by side" if repeats else ""))
     fig.tight_layout()
     return fig
 
@@ -295,14 +410,15 @@ def plot_campaign_frequencies(records):
     records : batch records with ``modes`` [{n, branch, frequency_hz}]. Returns the figure.
     """
     ok, x, xlabel, names = _campaign_axis(records)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    fig, axes = _subplots(1, 2, figsize=(11, 4.5), sharey=True)
     for ax, br in zip(axes, ("same", "opposite")):
         keys = sorted({m["n"] for r in ok for m in (r.get("modes") or []) if m["branch"] == br})
-        cmap = plt.get_cmap("viridis", max(len(keys), 2))
+        cmap = matplotlib.colormaps["viridis"].resampled(max(len(keys), 2))
         for i, n in enumerate(keys):
             f = np.array([next((m["frequency_hz"] for m in (r.get("modes") or []) if m["n"] == n
                                 and m["branch"] == br), np.nan) for r in ok], float)
-            ax.plot(x, f, "o-", ms=3, color=cmap(i), label=f"n = {n}")
+            order = np.argsort(x, kind="stable")
+            ax.plot(_dodge(x)[order], f[order], "o-", ms=3, color=cmap(i), label=f"n = {n}")
         ax.set_title(f"{br} direction")
         ax.set_xlabel(xlabel)
         ax.grid(True, alpha=0.3)
@@ -329,11 +445,16 @@ def _band_lines(table, r):
 
 
 def stabilization_figure(table, r):
-    """The stabilization diagram over the mean FRF magnitude of the lsce band.
+    """The stabilization diagram of the lsce band: one panel per circumferential order group
+    when the FRFs were split into orders (:func:`stabilization_grid`), else one diagram over
+    the mean FRF magnitude.
 
     table : ModalTable ; r : FRFResult it came from. Returns the figure.
     """
     lines = _band_lines(table, r)
+    d = table.diagram
+    if d.size and np.unique(d[:, 0]).size > 1:  # split into circumferential orders: one panel each
+        return stabilization_grid(table, band_hz=(r.freq_hz[lines][0], r.freq_hz[lines][-1]))
     mag = np.nanmean(np.abs(r.H[..., lines]).reshape(-1, lines.sum()), axis=0)
     return plot_stabilization(table, H_freq=r.freq_hz[lines], H_mag=mag).figure
 
@@ -367,12 +488,13 @@ def synthesis_figure(table, r, *, points=None, n_channels: int = 2):
 
 
 def _mode_figure(shapes, k, frames, exaggeration, size_in):
-    """The figure of one moving mode and its frame-drawing function (``draw(i)``)."""
-    fig, ax = plt.subplots(figsize=(size_in, size_in))
+    """The figure of one moving mode, its frame-drawing function (``draw(i)``) and a function
+    that turns the same figure to another mode (``set_mode(k)``: data, scale and title)."""
+    fig, ax = _subplots(figsize=(size_in, size_in))
     rings = list(dict.fromkeys(shapes.ring))
     r_max = float(np.max(np.hypot(shapes.xyz_m[:, 0], shapes.xyz_m[:, 1])))
     colors = {"tread": "tab:blue", "sidewall": "tab:red", "rim": "0.3"}
-    lines, data = [], []
+    lines, geo = [], []
     for ring in rings:
         sel = np.flatnonzero(np.array(shapes.ring) == ring)
         order = sel[np.argsort(np.mod(shapes.angle_rad[sel], 2 * np.pi))]
@@ -382,26 +504,32 @@ def _mode_figure(shapes, k, frames, exaggeration, size_in):
         ax.plot(rad_c * np.cos(th_c), rad_c * np.sin(th_c), color="0.85", lw=0.8)
         (ln,) = ax.plot([], [], color=colors.get(ring, "k"), lw=1.5, marker=".", ms=3, label=ring)
         lines.append(ln)
-        data.append((th_c, rad_c, np.append(shapes.radial[k, order], shapes.radial[k, order[0]])))
-    peak = max(np.max(np.abs(d[2])) for d in data) or 1.0
-    scale = exaggeration * r_max / peak
+        geo.append((th_c, rad_c, np.append(order, order[0])))
     lim = 1.25 * r_max
     ax.set_xlim(-lim, lim)
     ax.set_ylim(-lim, lim)
     ax.set_aspect("equal")
     ax.axis("off")
-    ax.set_title(f"{shapes.frequency_hz[k]:.1f} Hz  {shapes.label[k]}", fontsize=8)
+    title = ax.set_title("", fontsize=8)
     ax.legend(fontsize=6, loc="lower right", frameon=False)
-    fig.tight_layout(pad=0.2)
+    fig.subplots_adjust(left=0.02, right=0.98, bottom=0.02, top=0.9)  # (tight_layout: 4x slower, same look)
+    state = {}
+
+    def set_mode(k):
+        phis = [shapes.radial[k, idx] for _, _, idx in geo]
+        peak = max(np.max(np.abs(p)) for p in phis) or 1.0
+        state.update(phis=phis, scale=exaggeration * r_max / peak)
+        title.set_text(f"{shapes.frequency_hz[k]:.1f} Hz  {shapes.label[k]}")
 
     def draw(i):
         rot = np.exp(2j * np.pi * i / frames)
-        for ln, (th, rad, phi) in zip(lines, data):
-            rr = rad + scale * np.real(phi * rot)
+        for ln, (th, rad, _), phi in zip(lines, geo, state["phis"]):
+            rr = rad + state["scale"] * np.real(phi * rot)
             ln.set_data(rr * np.cos(th), rr * np.sin(th))
         return lines
 
-    return fig, draw
+    set_mode(k)
+    return fig, draw, set_mode
 
 
 def animate_mode(shapes, k: int, *, frames: int = 16, exaggeration: float = 0.2, size_in: float = 2.4):
@@ -412,27 +540,65 @@ def animate_mode(shapes, k: int, *, frames: int = 16, exaggeration: float = 0.2,
     report use :func:`mode_gif`."""
     from matplotlib.animation import FuncAnimation
 
-    fig, draw = _mode_figure(shapes, k, frames, exaggeration, size_in)
+    fig, draw, _ = _mode_figure(shapes, k, frames, exaggeration, size_in)
     return FuncAnimation(fig, draw, frames=frames, blit=True)
 
 
-def mode_gif(shapes, k: int, *, frames: int = 12, exaggeration: float = 0.2, size_in: float = 2.4,
-             dpi: int = 60, fps: int = 12) -> bytes:
-    """One mode shape moving (as :func:`animate_mode`) as the bytes of a looping GIF
-    (Pillow, an adaptive palette: a few tens of kB a mode at the defaults)."""
+def iter_mode_gifs(shapes, modes=None, *, frames: int = 12, exaggeration: float = 0.2, size_in: float = 2.4,
+                   dpi: int = 60, fps: int = 12):
+    """Each mode shape moving (as :func:`animate_mode`) as the bytes of a looping GIF
+    (Pillow, an adaptive palette: a few tens of kB a mode at the defaults).
+
+    Parameters
+    ----------
+    shapes : tiremodal_cli.export.ShapeSet
+    modes : sequence of int, optional — which modes (default: all)
+    frames : frames over one period ; exaggeration : largest displacement / tread radius
+    size_in, dpi : figure size (inches) and resolution ; fps : frames per second
+
+    Yields
+    ------
+    bytes, one GIF per mode, in order. One figure is drawn for all of them and each frame
+    redraws only the moving rings (blitting): about 0.06 s a mode.
+    """
     import io
 
     from PIL import Image
 
-    fig, draw = _mode_figure(shapes, k, frames, exaggeration, size_in)
+    modes = range(shapes.radial.shape[0]) if modes is None else list(modes)
+    if not len(modes):
+        return
+    fig, draw, set_mode = _mode_figure(shapes, modes[0], frames, exaggeration, size_in)
     fig.set_dpi(dpi)
-    images = []
-    for i in range(frames):
-        draw(i)
-        fig.canvas.draw()
-        rgba = np.asarray(fig.canvas.buffer_rgba())
-        images.append(Image.fromarray(rgba[..., :3]).convert("P", palette=Image.Palette.ADAPTIVE, colors=32))
-    plt.close(fig)
-    buf = io.BytesIO()
-    images[0].save(buf, format="GIF", save_all=True, append_images=images[1:], duration=int(1000 / fps), loop=0)
-    return buf.getvalue()
+    ax, canvas = fig.axes[0], fig.canvas
+    try:
+        for k in modes:
+            set_mode(k)
+            for ln in draw(0):
+                ln.set_visible(False)
+            canvas.draw()  # the still parts and the title (the moving rings hidden)
+            background = canvas.copy_from_bbox(fig.bbox)
+            images = []
+            for i in range(frames):
+                canvas.restore_region(background)
+                for ln in draw(i):
+                    ln.set_visible(True)
+                    ax.draw_artist(ln)
+                rgba = np.asarray(canvas.buffer_rgba())
+                images.append(Image.fromarray(rgba[..., :3]).convert("P", palette=Image.Palette.ADAPTIVE, colors=32))
+            buf = io.BytesIO()
+            images[0].save(buf, format="GIF", save_all=True, append_images=images[1:], duration=int(1000 / fps),
+                           loop=0)
+            yield buf.getvalue()
+    finally:
+        fig.clear()
+
+
+def mode_gifs(shapes, modes=None, **kw) -> list[bytes]:
+    """Every mode's GIF as a list (:func:`iter_mode_gifs`, same parameters)."""
+    return list(iter_mode_gifs(shapes, modes, **kw))
+
+
+def mode_gif(shapes, k: int, **kw) -> bytes:
+    """One mode shape moving as the bytes of a looping GIF (:func:`mode_gifs` for one mode)."""
+    return mode_gifs(shapes, [k], **kw)[0]

@@ -20,11 +20,12 @@ import os
 import shutil
 import tempfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from . import names
 from .errors import DataFormatError
 from .files import _UMASK, install_dir, write_text_atomic
 from .pipeline import MANIFEST, read_manifest, verify_manifest
@@ -56,6 +57,8 @@ h1{font-size:1.5em;border-bottom:2px solid #345;padding-bottom:.2em}h2{font-size
 table{border-collapse:collapse;font-size:.85em;margin:.5em 0}td,th{border:1px solid #ccc;padding:.2em .5em;
 text-align:right}th{background:#eef2f6}td.l,th.l{text-align:left}figure{margin:1em 0}
 figure img{max-width:100%;border:1px solid #ddd}figcaption{font-size:.85em;color:#555}
+.gifs{display:flex;flex-wrap:wrap;gap:.3em}.gifs figure{margin:0;width:150px}
+.gifs img{width:150px;border:none}.gifs figcaption{font-size:.7em}
 .ok{color:#161}.bad{color:#a11}.muted{color:#777;font-size:.85em}
 """
 
@@ -79,25 +82,56 @@ def _table(rows: list[dict], cols: list[tuple[str, str]], *, left=()) -> str:
         return _e(v) if isinstance(v, str) else _num(v)
     head = "".join(cell("th", k, _e(h)) for k, h in cols)
     body = "".join("<tr>" + "".join(cell("td", k, text(r.get(k))) for k, _ in cols) + "</tr>" for r in rows)
-    return f"<table><tr>{head}</tr>{body}</table>"
+    return f"<table>{f'<tr>{head}</tr>' if any(h for _, h in cols) else ''}{body}</table>"
 
 
-def _page(title: str, body: str) -> str:
+def _anchor(m) -> str:
+    import re
+
+    slug = re.sub(r"[^a-z0-9]+", "-", html.unescape(re.sub(r"<[^>]+>", "", m.group(2))).lower()).strip("-")
+    return f'<{m.group(1)} id="{slug}">{m.group(2)}</{m.group(1)}>'
+
+
+def _page(title: str, body: str, footer: str = "") -> str:
+    """The page: every h2/h3 gets an id from its words (``#stabilization-diagram``) to link to."""
+    import re
+
+    body = re.sub(r"<(h[23])>(.*?)</\1>", _anchor, body)
+    footer = re.sub(r"<(h[23])>(.*?)</\1>", _anchor, footer)
     return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title>'
             f"<style>{_CSS}</style></head><body>\n{body}\n"
-            f'<p class="muted">tiremodal {_e(__version__)}</p></body></html>\n')
+            f'<footer class="muted">{footer or _e(_written_by())}</footer></body></html>\n')
+
+
+def _written_by() -> str:
+    from .pipeline import provenance
+
+    p = provenance()
+    return (f"Page written {p['created_utc']} by tiremodal {p['tiremodal_version']}"
+            + (f" (commit {p['tiremodal_commit']})" if p.get("tiremodal_commit") else "") + ".")
+
+
+def _footer(man: dict) -> str:
+    """Provenance of a run's page: when and how the results were made, from what input."""
+    rows = [("results made", man.get("created_utc", "not recorded (an older run)")),
+            ("by", f"tiremodal {man.get('tiremodal_version', '?')}"
+                   + (f", commit {man['tiremodal_commit']}" if man.get("tiremodal_commit") else
+                      ", commit not known (not run from a git checkout)")),
+            ("command", man.get("command", "not recorded")),
+            ("options", ", ".join(f"{k} = {v}" for k, v in (man.get("options") or {}).items())),
+            ("input", f"{man.get('input_file', '')} (SHA-256 {man.get('input_sha256', '')})")]
+    return ("<h2>Provenance</h2>" + _table([{"k": k, "v": v} for k, v in rows], [("k", ""), ("v", "")],
+                                             left=("k", "v"))
+            + f"<p>{_e(_written_by())}</p>")
 
 
 def _render(fig, folder: Path, stem: str) -> bytes:
     """Save ``fig`` as folder/stem.png and .svg; return the PNG bytes (for embedding)."""
-    import matplotlib.pyplot as plt
-
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100)
     png = buf.getvalue()
     (folder / f"{stem}.png").write_bytes(png)
     fig.savefig(folder / f"{stem}.svg", format="svg")
-    plt.close(fig)
     return png
 
 
@@ -181,7 +215,11 @@ def report_run(folder, *, progress: Callable[[str], None] | None = None) -> Path
             if progress:
                 progress(stem)
             pngs[stem] = _render(makers[stem](), tmp, stem)
-        html_text = _page(f"tiremodal report: {man['summary']['measurement']}", _run_body(folder, man, ident, diag, pngs))
+        if progress:
+            progress("mode animations")
+        gifs = _mode_gifs(folder, tmp)
+        body = _run_body(folder, man, ident, diag, pngs, gifs)
+        html_text = _page(f"tiremodal report: {man['summary']['measurement']}", body, _footer(man))
         install_dir(tmp, folder / FIGURE_DIR)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -213,70 +251,230 @@ def _comparison_html(cmp: dict | None) -> list[str]:
     return out
 
 
-def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict) -> str:
-    s = man["summary"]
-    cap = dict(FIGURES)
-    fig = (lambda k: _img(pngs[k], cap[k]))
-    p_kpa = None if s.get("inflation_pressure") is None else s["inflation_pressure"] / 1e3
-    facts = [("measurement", s["measurement"]), ("tyre", s.get("tire")),
-             ("inflation pressure", None if p_kpa is None else f"{p_kpa:g} kPa"),
-             ("impact points × hits", f"{s['n_points']} × {s['n_hits']}"),
-             ("sample rate", f"{s['sample_rate']:g} Hz"), ("modes found", s["modes_found"]),
-             ("model P0", f"{man.get('model_P0', man['params']['P0']) / 1e3:g} kPa"),
-             ("rim", s.get("rim", "from the parameters")),
-             ("input SHA-256", man["input_sha256"][:16] + "…")]
+def _mode_gifs(folder: Path, figdir: Path) -> list[tuple[str, bytes]]:
+    """Each mode moving (tread, sidewall and rim rings in the tyre's plane), as GIFs: written
+    to ``figures/modes/mode_NN.gif`` and returned as (caption, bytes) for the page
+    (about 40 kB a mode: a 34-mode report stays well under 10 MB)."""
+    from .export import shape_set
+    from .modalfile import read_modal
+    from .plots import mode_gifs
+
+    table = read_modal(folder / "modal.h5")
+    if table.n_modes == 0 or "tread" not in table.channel_location:
+        return []
+    s = shape_set(table)
+    (figdir / "modes").mkdir()
+    out = []
+    for k, gif in enumerate(mode_gifs(s)):
+        (figdir / "modes" / f"mode_{k + 1:02d}.gif").write_bytes(gif)
+        out.append((f"mode {k + 1}: {s.frequency_hz[k]:.1f} Hz {s.label[k]}", gif))
+    return out
+
+
+def _gif_grid(gifs: list[tuple[str, bytes]]) -> str:
+    cells = "".join(f'<figure class="gif"><img alt="{_e(c)}" src="data:image/gif;base64,'
+                    f'{base64.b64encode(b).decode("ascii")}"><figcaption>{_e(c)}</figcaption></figure>'
+                    for c, b in gifs)
+    return f'<div class="gifs">{cells}</div>'
+
+
+@dataclass(frozen=True)
+class _RunPage:
+    """What every section of a run's page reads: the folder, its manifest and JSON outputs,
+    the rendered figures (PNG bytes by stem) and the mode animations."""
+
+    folder: Path
+    man: dict
+    ident: dict
+    diag: dict
+    pngs: dict
+    gifs: tuple = ()
+
+    @property
+    def summary(self) -> dict:
+        return self.man["summary"]
+
+    def fig(self, stem: str) -> str:
+        cap = dict(FIGURES)[stem]
+        if stem == "frf" and self.summary.get("starts_at") == "lsce":
+            cap = "FRFs of two impact points with their coherence, as the other system estimated them (in SI)."
+        return _img(self.pngs[stem], cap)
+
+
+def _head(p: _RunPage) -> list[str]:
+    s = p.summary
     out = [f"<h1>Modal test report — {_e(Path(s['measurement']).name)}</h1>",
-           f"<p><b>Diagnosis:</b> {_e(s['verdict'])}</p>",
-           "<h2>Test</h2>", _table([{"k": k, "v": v} for k, v in facts], [("k", ""), ("v", "")], left=("k", "v"))]
+           f"<p><b>Diagnosis:</b> {_e(_in_words(s['verdict']))}</p>"]
+    if s.get("starts_at") == "lsce":
+        out.append("<p><b>Input:</b> FRFs from another system (UFF 58): the pipeline started at lsce. "
+                   "There were no time records, so no hit checks, no windows and no force spectrum here; "
+                   "the FRFs are the other system's, taken to SI as stated below.</p>")
+    return out
+
+
+def _test_section(p: _RunPage) -> list[str]:
+    s = p.summary
+    out = ["<h2>Test</h2>", _table([{"k": k, "v": v} for k, v in _test_facts(p.man)], [("k", ""), ("v", "")],
+                                   left=("k", "v"))]
     rej = s.get("rejected_hits") or []
     out.append(f"<h2>Rejected hits ({len(rej)})</h2>")
     out.append(_table([{**x, "point": _one_based(x.get("point")), "hit": _one_based(x.get("hit"))} for x in rej],
                       [("point", "point"), ("hit", "hit"), ("channel", "channel"), ("reason", "reason")],
-                      left=("channel", "reason")) if rej else "<p>None: every hit passed the checks.</p>")
-    out += ["<h2>FRFs and coherence</h2>", fig("frf"), "<h2>Stabilization diagram</h2>", fig("stabilization")]
-    modes = _modes_rows(folder)
-    out += ["<h2>Modal table</h2>", _table(modes, [("mode", "mode"), ("frequency_hz", "f [Hz]"),
-                                                   ("damping_pct", "ζ [%]"), ("n", "n"), ("branch", "branch"),
-                                                   ("n_confidence", "n conf."), ("mpc", "MPC"),
-                                                   ("frequency_uncertainty_hz", "σf [Hz]")], left=("branch",))]
-    out += ["<h2>MAC matrix</h2>", fig("mac"), "<h2>Mode shapes</h2>", fig("shapes"),
-            "<h2>Measured against synthesised FRFs</h2>", fig("synthesis")]
-    par = [{"name": k, "value": v["value"], "std_error": v["std_error"],
+                      left=("channel", "reason")) if rej else
+               "<p>Not checked: the input holds FRFs, not hits.</p>" if s.get("starts_at") == "lsce" else
+               "<p>None: every hit passed the checks.</p>")
+    return out
+
+
+def _modes_section(p: _RunPage) -> list[str]:
+    out = ["<h2>FRFs and coherence</h2>", p.fig("frf"), "<h2>Stabilization diagram</h2>", p.fig("stabilization")]
+    out += ["<h2>Modal table</h2>", _table(_modes_rows(p.folder),
+                                           [("mode", "mode"), ("frequency_hz", "f [Hz]"), ("damping_pct", "ζ [%]"),
+                                            ("n", "n"), ("branch", "branch"), ("n_confidence", "n conf."),
+                                            ("mpc", "MPC"), ("frequency_uncertainty_hz", "σf [Hz]")],
+                                           left=("branch",))]
+    out += ["<h2>MAC matrix</h2>", p.fig("mac"), "<h2>Mode shapes</h2>", p.fig("shapes")]
+    if p.gifs:
+        out += ["<h3>The modes moving</h3>",
+                "<p>Each mode over one period: tread (blue), sidewall (red) and rim (grey) displaced radially "
+                "by Re(φ e<sup>iωt</sup>), the largest displacement drawn at a fifth of the radius.</p>",
+                _gif_grid(p.gifs)]
+    return out + ["<h2>Measured against synthesised FRFs</h2>", p.fig("synthesis")]
+
+
+def _identification_section(p: _RunPage) -> list[str]:
+    ident = p.ident
+    par = [{"name": names.long_label(k), "value": v["value"], "std_error": v["std_error"],
             "rel": 100 * v["std_error"] / abs(v["value"]) if v["value"] else None} for k, v in ident["parameters"].items()]
-    out += ["<h2>Model identification</h2>",
-            f"<p>RMS frequency error {ident['rms_error_pct']:.3f} %, max {ident['max_error_pct']:.3f} % over "
-            f"{len(ident['modes'])} modes.</p>",
-            _table(par, [("name", "parameter"), ("value", "value"), ("std_error", "std. error"), ("rel", "rel. [%]")],
-                   left=("name",))]
+    out = ["<h2>Model identification</h2>",
+           f"<p>RMS frequency error {ident['rms_error_pct']:.3f} %, max {ident['max_error_pct']:.3f} % over "
+           f"{len(ident['modes'])} modes.</p>",
+           _table(par, [("name", "parameter"), ("value", "value"), ("std_error", "std. error"), ("rel", "rel. [%]")],
+                  left=("name",))]
     if ident.get("undetermined"):
-        out.append("<p>Not determined by these data: " + "; ".join(f"{_e(k)} ({_e(v)})"
+        out.append("<p>Not determined by these data: " + "; ".join(f"{_e(names.long_label(k))} ({_e(v)})"
                                                                    for k, v in ident["undetermined"].items()) + "</p>")
-    out += [fig("fit"), fig("convergence")]
-    out += _comparison_html(ident.get("model_comparison"))
+    out += _set_aside_html(ident)
+    out += [p.fig("fit"), p.fig("convergence")]
+    return out + _comparison_html(ident.get("model_comparison"))
+
+
+def _diagnosis_section(p: _RunPage) -> list[str]:
+    diag = p.diag
     before, after = diag["residual_before"], diag["residual_after"]
-    out += ["<h2>Residual diagnosis</h2>", f"<p>{_e(diag['verdict'])}</p>",
-            _table([{"k": "before", "rms": before["rms_error_pct"], "max": before["max_error_pct"],
-                     "chi2": before["chi2"], "dof": before["dof"], "p": before["p_value"]},
-                    {"k": "after", "rms": after["rms_error_pct"], "max": after["max_error_pct"],
-                     "chi2": after["chi2"], "dof": after["dof"], "p": after["p_value"]}],
-                   [("k", ""), ("rms", "RMS error [%]"), ("max", "max error [%]"), ("chi2", "χ²"), ("dof", "dof"),
-                    ("p", "p")], left=("k",)),
-            fig("residuals"), "<h3>Candidates</h3>",
-            _table([{**c, "adopted": "yes" if c["adopted"] else ""} for c in diag["candidates"]],
-                   [("name", "candidate"), ("round", "round"), ("rms_error_pct", "RMS [%]"), ("aicc", "ΔAICc"),
-                    ("f_p_value", "F-test p"), ("adopted", "adopted"), ("reason", "reason")],
-                   left=("name", "adopted", "reason"))]
+    out = ["<h2>Residual diagnosis</h2>", f"<p>{_e(_in_words(diag['verdict']))}</p>",
+           _table([{"k": "before", "rms": before["rms_error_pct"], "max": before["max_error_pct"],
+                    "chi2": before["chi2"], "dof": before["dof"], "p": before["p_value"]},
+                   {"k": "after", "rms": after["rms_error_pct"], "max": after["max_error_pct"],
+                    "chi2": after["chi2"], "dof": after["dof"], "p": after["p_value"]}],
+                  [("k", ""), ("rms", "RMS error [%]"), ("max", "max error [%]"), ("chi2", "χ²"), ("dof", "dof"),
+                   ("p", "p")], left=("k",)),
+           p.fig("residuals"), "<h3>Candidates</h3>",
+           _table([{**c, "name": f"{names.effect_title(c['name'])} ({c['name']})",
+                    "adopted": "yes" if c["adopted"] else ""} for c in diag["candidates"]],
+                  [("name", "candidate"), ("round", "round"), ("rms_error_pct", "RMS [%]"), ("score", "ΔAICc"),
+                   ("f_p_value", "F-test p"), ("adopted", "adopted"), ("reason", "reason")],
+                  left=("name", "adopted", "reason"))]
+    final = (diag.get("augmented") or {}).get("parameters") or {}
+    if final:
+        out += ["<h3>The final model's parameters</h3>",
+                _table([{"name": names.long_label(k), "value": v.get("value"), "std_error": v.get("std_error")}
+                        for k, v in final.items()],
+                       [("name", "parameter"), ("value", "value"), ("std_error", "std. error")], left=("name",))]
     if diag.get("unexplained_modes"):
         out += ["<h3>Modes no (n, branch) explains</h3>",
                 _table(diag["unexplained_modes"], [("frequency_hz", "f [Hz]"), ("n", "n"), ("reason", "reason")],
                        left=("reason",))]
-    preds = diag["predictions"]["augmented"]
-    out += ["<h2>Predictions</h2>", fig("predictions"),
-            _table([{**p, "measured": "" if p.get("measured") is None else p["measured"]} for p in preds],
+    return out
+
+
+def _predictions_section(p: _RunPage) -> list[str]:
+    preds = p.diag["predictions"]["augmented"]
+    return ["<h2>Predictions</h2>", p.fig("predictions"),
+            _table(_predictions_rows(preds, p.diag["modes"]),
                    [("n", "n"), ("branch", "branch"), ("model_hz", "model [Hz]"), ("std_hz", "σ [Hz]"),
                     ("measured", "measured [Hz]")], left=("branch",)),
-            "<h2>Parameter sensitivity</h2>", fig("sensitivity")]
-    return "\n".join(out)
+            "<h2>Parameter sensitivity</h2>", p.fig("sensitivity")]
+
+
+#: The sections of a run's page, in order: each a function of :class:`_RunPage` returning
+#: HTML parts. A new section (e.g. the modes the diagnosis set aside, or the verdict's
+#: uncertainty) is one function added here; the provenance footer follows the last.
+SECTIONS = (_head, _test_section, _modes_section, _identification_section, _diagnosis_section,
+            _predictions_section)
+
+
+def _run_body(folder: Path, man: dict, ident: dict, diag: dict, pngs: dict, gifs=()) -> str:
+    page = _RunPage(folder, man, ident, diag, pngs, tuple(gifs))
+    return "\n".join(part for section in SECTIONS for part in section(page))
+
+
+def _in_words(text: str) -> str:
+    """A sentence with each effect's code name followed by its title in words."""
+    import re
+
+    from .effects import EFFECTS
+
+    for k in EFFECTS:
+        text = re.sub(rf"\b{re.escape(k)}\b", f"{k} ({names.effect_title(k)})", text)
+    return text
+
+
+def _predictions_rows(preds: list[dict], modes: list[dict]) -> list[dict]:
+    """The final model's predictions with the measured frequency of each (n, branch) in Hz
+    (several, joined, for a split pair; blank where the test has none)."""
+    out = []
+    for p in preds:
+        f = [m["measured_hz"] for m in modes if m["n"] == p["n"] and m["branch"] == p["branch"]]
+        out.append({**p, "measured": "; ".join(f"{x:.4g}" for x in sorted(f))})
+    return out
+
+
+def _test_facts(man: dict) -> list[tuple[str, object]]:
+    """The test's facts for the page's first table: (label, value) rows."""
+    s = man["summary"]
+    p_kpa = None if s.get("inflation_pressure") is None else s["inflation_pressure"] / 1e3
+    facts = [("measurement", s["measurement"]), ("tyre", s.get("tire")),
+             ("inflation pressure", None if p_kpa is None else f"{p_kpa:g} kPa")]
+    src = s.get("frf_source")
+    if src:
+        from .frffile import UNITS
+
+        facts += [("input", f"{src['kind']}; the pipeline started at lsce"),
+                  ("impact points", s["n_points"]),
+                  ("FRF units", f"{src['unit_in_file']} in the file, × {src['to_si']:.6g} → {UNITS[src['form']]} "
+                                f"({src['form']}); from {src['from']}"),
+                  ("point angles from", src["geometry"]),
+                  ("sign flipped (negative direction code)", ", ".join(src["sign_flipped"]) or "none")]
+        if src.get("options_not_used"):
+            facts.append(("options not used", src["options_not_used"]))
+        if src.get("header"):
+            facts.append(("file header (UFF 151)", "; ".join(f"{k}: {v}" for k, v in src["header"].items() if v)))
+    else:
+        facts += [("impact points × hits", f"{s['n_points']} × {s['n_hits']}"),
+                  ("sample rate", f"{s['sample_rate']:g} Hz")]
+    facts += [("modes found", s["modes_found"]),
+              ("model P0", f"{man.get('model_P0', man['params']['P0']) / 1e3:g} kPa"),
+              ("rim", s.get("rim", "from the parameters")),
+              ("input SHA-256", man["input_sha256"][:16] + "…")]
+    return facts
+
+
+def _set_aside_html(ident: dict) -> list[str]:
+    """The modes the robust base fit set aside, each with its reason, and the rule."""
+    aside, rule = ident.get("set_aside"), ident.get("outlier_rule") or {}
+    if aside is None:
+        return []
+    head = [f"<h3>Modes set aside ({len(aside)})</h3>"]
+    how = (f"<p>A mode is set aside when its error stands out of the others' by more than "
+           f"{rule.get('z_crit', float('nan')):.2f} robust standard deviations (the Bonferroni limit for "
+           f"{len(ident.get('modes', [])) + len(aside)} modes at a false-rejection rate of "
+           f"{rule.get('alpha', float('nan')):g} per fit); the diagnosis asks which candidate brings it back.</p>")
+    if not aside:
+        return head + ["<p>None: the model represents every mode.</p>", how]
+    return head + [_table(aside, [("n", "n"), ("branch", "branch"), ("frequency_hz", "measured [Hz]"),
+                                  ("model_hz", "model [Hz]"), ("error_pct", "error [%]"), ("reason", "reason")],
+                          left=("branch", "reason")), how]
 
 
 def _modes_rows(folder: Path) -> list[dict]:
@@ -323,7 +521,8 @@ def report_batch(outdir, *, progress: Callable[[str, int, int], None] | None = N
         os.chmod(tmp, 0o777 & ~_UMASK)
         try:
             figs = [(_render(plot_campaign_parameters(recs), tmp, "campaign_parameters"),
-                     "Identified parameters across the tests (± 1 standard error)."),
+                     "Identified parameters across the tests (± 1 standard error), and the parameters of the "
+                     "effects the diagnosis added (final model); repeats at one condition side by side."),
                     (_render(plot_campaign_frequencies(recs), tmp, "campaign_frequencies"),
                      "Measured frequency of each (n, branch) across the tests.")]
             install_dir(tmp, outdir / FIGURE_DIR)
@@ -340,11 +539,12 @@ def report_batch(outdir, *, progress: Callable[[str, int, int], None] | None = N
             f'<td class="l">{name}</td>', f'<td class="l {cls}">{_e(r["status"])}</td>',
             f"<td>{_num(None if p is None else p / 1e3, '{:g}')}</td>", f"<td>{_num(r.get('modes_found'))}</td>",
             f"<td>{_num(r.get('rms_before_pct'), '{:.3f}')}</td>", f"<td>{_num(r.get('rms_after_pct'), '{:.3f}')}</td>",
-            f'<td class="l">{_e(", ".join((r.get("adopted_effects") or []) + (r.get("parameter_off") or [])))}</td>',
+            f'<td class="l">{_e(_added(r))}</td>',
+            f'<td class="l">{_e(_effect_values(r))}</td>',
             f'<td class="l">{_e(r.get("reason"))}</td>']) + "</tr>")
     head = "".join(f'<th class="{c}">{h}</th>' for h, c in (
         ("test", "l"), ("status", "l"), ("pressure [kPa]", ""), ("modes", ""), ("RMS before [%]", ""),
-        ("RMS after [%]", ""), ("added to the model", "l"), ("reason", "l")))
+        ("RMS after [%]", ""), ("added to the model", "l"), ("its parameters (final model)", "l"), ("reason", "l")))
     body = [f"<h1>Campaign report — {_e(outdir.resolve().name)}</h1>",
             f"<p>{len(recs)} tests: {n['done'] + n['skipped']} with outputs, {n['failed']} failed.</p>",
             f"<table><tr>{head}</tr>{''.join(rows)}</table>"]
@@ -353,9 +553,42 @@ def report_batch(outdir, *, progress: Callable[[str, int, int], None] | None = N
                              overwrite=True)
 
 
+def _added(rec: dict) -> str:
+    """What the diagnosis added to the model of one test, in words."""
+    return "; ".join(names.effect_title(x) for x in (rec.get("adopted_effects") or []) + (rec.get("parameter_off") or []))
+
+
+def _effect_values(rec: dict) -> str:
+    """The final model's effect parameters of one test: ``T_s [N] = 2.16e+04 ± 35``."""
+    out = []
+    for k, v in (rec.get("augmented_parameters") or {}).items():
+        if "." in k:
+            v = v if isinstance(v, dict) else {"value": v}
+            e = v.get("std_error")
+            out.append(f"{names.label(k)} = {v['value']:.4g}" + ("" if e is None else f" ± {e:.2g}"))
+    return "; ".join(out)
+
+
 def report(outdir, *, progress=None) -> list[Path]:
-    """Report a run folder (``run.json``) or a batch folder (``summary.jsonl``); return
-    the HTML pages written (the index last for a batch)."""
+    """Report a run folder (``run.json``) or a batch folder (``summary.jsonl``).
+
+    Parameters
+    ----------
+    outdir : path-like
+        A folder written by ``run`` (:func:`tiremodal_cli.pipeline.run_folder`) or ``batch``.
+    progress : callable, optional
+        For a batch: called with (test name, done, total) after each test's page.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The HTML pages written (the index last for a batch).
+
+    Raises
+    ------
+    DataFormatError
+        Neither a run nor a batch folder, or a run folder that does not match its manifest.
+    """
     from .batch import SUMMARY_JSONL
 
     outdir = Path(outdir)

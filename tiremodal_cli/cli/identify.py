@@ -9,6 +9,11 @@ import numpy as np
 
 from ..files import check_overwrite, refuse_input_as_output, write_text_atomic
 from ..identify import PAPER_GA, FitOptions, fit, fit_report, modes_from_rows, predict_table
+from ..robust import robust_fit, with_sigma
+
+#: Floor of a measured frequency's relative uncertainty for the screen, % (diagnose's:
+#: the repeatability of an impact test's frequencies)
+NOISE_FLOOR_PCT = 0.1
 from .main import cli
 from ..errors import DataFormatError
 from .options import (FiniteRange, PlotPath, Progress, echo_json, json_option, load_params, no_usable_modes,
@@ -77,10 +82,13 @@ def common_fit_options(f):
 @click.option("--csv", "csv_out", type=click.Path(dir_okay=False, path_type=Path), help="Per-mode table as CSV.")
 @click.option("--plot-fit", type=PlotPath(), help="Measured and model against n.")
 @click.option("--plot-convergence", type=PlotPath())
+@click.option("--alpha", type=FiniteRange(0, 0.5, min_open=True, max_open=True), default=0.01, show_default=True,
+              help="False-rejection rate per fit of the screen that sets aside modes the model cannot represent.")
+@click.option("--keep-all", is_flag=True, help="Fit every mode (no screen): the paper's plain least squares.")
 @overwrite_option
 @json_option
 def identify_cmd(modes_file, params_file, param_items, free, bounds, weights, seed, paper_ga, population, generations,
-                 predict_n, min_confidence, csv_out, plot_fit, plot_convergence, overwrite, as_json):
+                 predict_n, min_confidence, csv_out, plot_fit, plot_convergence, alpha, keep_all, overwrite, as_json):
     """Fit the model to MODES_FILE (a modal file from lsce, or a CSV with frequency_hz, n, branch)."""
     refuse_input_as_output({"--csv": csv_out, "--plot-fit": plot_fit, "--plot-convergence": plot_convergence},
                            {"MODES_FILE": modes_file, "--params": params_file})
@@ -99,11 +107,18 @@ def identify_cmd(modes_file, params_file, param_items, free, bounds, weights, se
         raise DataFormatError(no_usable_modes(modes_file, rows, skipped))
     bar = Progress("identify")
     try:
-        res = fit(modes, base, opt, progress=bar)
+        if keep_all:
+            res, aside = fit(modes, base, opt, progress=bar), None
+        else:  # modes the model cannot represent set aside before they move it (tiremodal_cli.robust)
+            rf = robust_fit(with_sigma(modes, NOISE_FLOOR_PCT), base, opt, alpha=alpha)
+            res, aside = rf.fit, rf
     finally:
         bar.close()
     preds = predict_table(res, predict_n, measured=res.modes)
     report = fit_report(res, skipped, preds)
+    if aside is not None:
+        report["set_aside"] = [a.to_dict() for a in aside.set_aside]
+        report["outlier_rule"] = {"z_crit": aside.z_crit, "scale": aside.scale, "alpha": aside.alpha}
     if csv_out:
         write_text_atomic(csv_out, rows_to_csv(res.modes), overwrite=overwrite)
     if plot_fit or plot_convergence:
@@ -123,6 +138,8 @@ def identify_cmd(modes_file, params_file, param_items, free, bounds, weights, se
     click.echo(f"{'n':>3} {'branch':>9} {'measured':>10} {'model':>10} {'error %':>8}")
     for m in res.modes:
         click.echo(f"{m['n']:3d} {m['branch']:>9} {m['measured_hz']:10.3f} {m['model_hz']:10.3f} {m['error_pct']:8.3f}")
+    for a in report.get("set_aside", []):
+        click.echo(f"set aside: n={a['n']} {a['branch']} at {a['frequency_hz']:.3f} Hz — {a['reason']}")
     if report["not_followed"]:
         click.echo("the model does not follow: " + ", ".join(f"n={m['n']} {m['branch']} ({m['error_pct']:+.1f} %)"
                                                              for m in report["not_followed"]))

@@ -35,7 +35,16 @@ def _human(d: dict) -> str:
 @click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
 @json_option
 def info_cmd(file, as_json):
-    """Summarise a tiremodal FILE (measurement, FRF or modal file)."""
+    """Summarise a tiremodal FILE (measurement, FRF or modal file, or a UFF file).
+
+    A UFF file of FRFs (dataset 58, function type 4) is described as ``run`` reads it: its
+    form, the unit found and its factor to SI, the channels and where their locations and
+    the points' angles come from; a UFF file of time records by its records.
+    """
+    if frffile.is_uff(file):
+        d = {"file": str(file), **_describe_uff(file)}
+        echo_json(d) if as_json else click.echo(_human(d))
+        return
     fmt = measurement.file_format(file)
     try:
         describe = DESCRIBERS[fmt]
@@ -47,3 +56,24 @@ def info_cmd(file, as_json):
         echo_json(d)
     else:
         click.echo(_human(d))
+
+
+def _describe_uff(path) -> dict:
+    """A UFF file: FRFs as ``run`` reads them, else its time records counted."""
+    import numpy as np
+    import pyuff
+
+    if 4 in frffile.uff_function_types([path]):
+        return frffile.describe_frf_uff(path)
+    sets = pyuff.UFF(str(path)).read_sets()
+    sets = [s for s in ([sets] if isinstance(sets, dict) else sets) if s.get("type") == 58]
+    if not sets:
+        raise DataFormatError(f"{path}: no dataset 58 (function records) in the UFF file")
+    x = np.asarray(sets[0]["x"], dtype=float)
+    force = [s for s in sets if int(s.get("ordinate_spec_data_type", 0) or 0) == 13]
+    return {"format": "UFF 58 records", "function_types": sorted({int(s.get("func_type", 0)) for s in sets}),
+            "n_records": len(sets), "n_force_records": len(force),
+            "reference_nodes": sorted({int(s["ref_node"]) for s in sets}),
+            "responses": sorted({f"{int(s['rsp_node'])}:{int(s['rsp_dir'])}" for s in sets if s not in force}),
+            "n_samples": int(x.size), "sample_rate": float(1 / (x[1] - x[0])) if x.size > 1 else None,
+            "read_by": "tiremodal ingest (time records, with a mapping of the channels)"}

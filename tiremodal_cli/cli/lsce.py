@@ -21,7 +21,11 @@ def read_any_frf(path: Path, mapping=None):
     """An FRF file (HDF5 from ``tiremodal frf``) or UFF 58 FRFs (function type 4)."""
     if path.suffix.lower() in (".uff", ".unv"):
         chans, points = load_channel_map(mapping) if mapping else ({}, {})
-        return read_frf_uff(path, channels=chans, points=points)
+        r = read_frf_uff(path, channels=chans, points=points)
+        if not np.isfinite(r.point_angle).any():
+            click.echo(f"lsce: warning: {path}: no point angles (no dataset 15 in the file, no --mapping): the modes "
+                       "are estimated as any structure's, without order n or branch", err=True)
+        return r
     return read_frf(path)
 
 

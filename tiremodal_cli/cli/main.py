@@ -27,7 +27,7 @@ SHORT_HELP = {
               "or for every test of the batch folder OUTDIR plus its index.html.",
     "simulate": "Simulate a roving-hammer test of a tyre into OUTPUT (HDF5).",
     "ingest": "Convert SOURCES (UFF 58 files/folders, or one CSV folder) into a measurement file.",
-    "info": "Summarise a tiremodal FILE (measurement, FRF or modal file).",
+    "info": "Summarise a tiremodal FILE (measurement, FRF or modal file, or a UFF file).",
     "frf": "Estimate FRFs of MEASUREMENT into OUTPUT, rejecting bad hits (reported).",
     "lsce": "Estimate modes of FRF_FILE (FRF HDF5 or UFF 58 FRFs) into OUTPUT.",
     "mac": "AutoMAC of MODAL_FILE, or cross-MAC against OTHER (a second modal file), --analytic or --model.",
@@ -84,6 +84,18 @@ class _LazyCommands(dict):
     def items(self):
         self._load_all()
         return dict.items(self)
+
+
+class _Stderr(logging.StreamHandler):
+    """A handler writing to the ``sys.stderr`` of the moment (a test runner swaps it)."""
+
+    @property
+    def stream(self):
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value):
+        pass
 
 
 class TiremodalGroup(click.Group):
@@ -155,4 +167,15 @@ def cli(verbose, quiet):
     CSV), stderr carries messages and progress bars. Exit status 2 means bad input.
     """
     level = logging.ERROR if quiet else {0: logging.WARNING, 1: logging.INFO}.get(verbose, logging.DEBUG)
-    logging.basicConfig(level=level, format="tiremodal: %(levelname)s: %(message)s", stream=sys.stderr)
+    # -v and -vv speak for tiremodal's own loggers; other libraries (matplotlib, h5py, dask)
+    # say only their warnings (errors with -q), never their info or debug chatter. One
+    # handler on the root, as logging.basicConfig would add (none when the host program,
+    # e.g. a test runner, has its own).
+    logging.getLogger("tiremodal_cli").setLevel(level)
+    root = logging.getLogger()
+    root.setLevel(logging.ERROR if quiet else logging.WARNING)
+    if not root.handlers:
+        handler = _Stderr()
+        handler.setFormatter(logging.Formatter("tiremodal: %(levelname)s: %(message)s"))
+        root.addHandler(handler)
+    click.get_current_context().obj = {"quiet": quiet, "verbose": verbose}

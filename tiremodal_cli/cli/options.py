@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import logging
 import sys
 from pathlib import Path
 
@@ -20,15 +21,31 @@ def echo_json(obj) -> None:
     click.echo(dumps(obj), nl=False)
 
 
+def _tty() -> bool:
+    return sys.stderr.isatty()
+
+
+def quiet() -> bool:
+    """True when ``tiremodal -q`` was given: nothing but errors on stderr."""
+    ctx = click.get_current_context(silent=True)
+    return bool(ctx is not None and (ctx.find_root().obj or {}).get("quiet"))
+
+
+def show_progress() -> bool:
+    """Bars and stage messages only for a person: stderr a terminal, and no ``-q``."""
+    return _tty() and not quiet()
+
+
 class Progress:
-    """A progress callback that draws a bar on stderr (nothing when stderr is not a TTY)."""
+    """A progress callback that draws a bar on stderr (nothing when stderr is not a TTY, or
+    with ``-q``)."""
 
     def __init__(self, label: str):
         self.label = label
         self.bar = None
 
     def __call__(self, done: int, total: int) -> None:
-        if not sys.stderr.isatty():
+        if not show_progress():
             return
         if self.bar is None:
             self.bar = click.progressbar(length=total, label=self.label, file=sys.stderr)
@@ -39,6 +56,35 @@ class Progress:
 
     def close(self):
         if self.bar is not None:
+            self.bar.__exit__(None, None, None)
+            self.bar = None
+
+
+class StageProgress:
+    """A bar over a long command's stages on stderr, the current stage beside it (on a
+    terminal, without ``-q``); each stage also logged at INFO (``-v``: the stages in a log).
+
+    Call it with each stage's name as it starts; :meth:`close` when done.
+    """
+
+    def __init__(self, label: str, stages):
+        self.label, self.stages, self.bar = label, list(stages), None
+        self._log = logging.getLogger("tiremodal_cli.progress")
+
+    def __call__(self, stage: str) -> None:
+        self._log.info("%s: %s", self.label, stage)
+        if not show_progress():
+            return
+        if self.bar is None:
+            self.bar = click.progressbar(length=len(self.stages), label=self.label, file=sys.stderr, show_pos=True,
+                                         show_eta=False, item_show_func=lambda s: s or "")
+            self.bar.__enter__()
+        k = self.stages.index(stage) if stage in self.stages else self.bar.pos
+        self.bar.update(max(k - self.bar.pos, 0), current_item=stage)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.update(len(self.stages) - self.bar.pos, current_item="done")
             self.bar.__exit__(None, None, None)
             self.bar = None
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import click
@@ -11,14 +10,7 @@ from ..errors import OutputExistsError
 from ..files import refuse_input_as_output
 from ..pipeline import MANIFEST, OUTPUTS, RunOptions, run_folder
 from .main import cli
-from .options import FiniteRange, band_option, echo_json, json_option, load_params, params_options
-
-
-def _stage_message(stage: str) -> None:
-    """'run: STAGE …' on a terminal (as a progress bar would be); nothing in a log, whose
-    stderr is for the result's one line."""
-    if sys.stderr.isatty():
-        click.echo(f"run: {stage} …", err=True)
+from .options import FiniteRange, StageProgress, band_option, echo_json, json_option, load_params, params_options
 
 
 @cli.command("run", epilog="\b\nExample:\n  tiremodal run sample_data/gl073a_sim.h5 -o out/gl073a --overwrite")
@@ -35,11 +27,17 @@ def _stage_message(stage: str) -> None:
 @click.option("--max-effects", type=click.IntRange(0, 5), default=2, show_default=True)
 @click.option("--p0-from-params", is_flag=True,
               help="Model P0 from the parameters, not the inflation pressure the measurement records.")
+@click.option("--mapping", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="For UFF FRFs: channels, point angles, [test] (as for ingest; default: the file's geometry).")
 @click.option("--overwrite", is_flag=True, help="Replace the outputs of an earlier run in OUTDIR.")
 @json_option
 def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp_window, seed, noise_floor_pct,
-            max_effects, p0_from_params, overwrite, as_json):
+            max_effects, p0_from_params, mapping, overwrite, as_json):
     """Run frf → lsce → identify → diagnose on MEASUREMENT, writing each stage into OUTDIR.
+
+    MEASUREMENT is a measurement file, or a UFF file of FRFs (dataset 58, function type 4,
+    from another system): such a test starts at lsce, in SI from the file's units, its
+    points placed by the file's geometry (dataset 15) or by --mapping.
 
     Writes frf.h5, modal.h5, modes.csv, identify.json, diagnosis.json and, last, run.json
     (checksums and summary) into a private folder beside OUTDIR, installed whole when
@@ -49,7 +47,7 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
     existing = [n for n in (*OUTPUTS, MANIFEST) if (outdir / n).exists()]
     if existing and not overwrite:  # checked again under the lock; here to refuse before any work
         raise OutputExistsError(f"output {str(outdir / existing[0])!r} exists; pass --overwrite to replace it")
-    refuse_input_as_output({"--output": outdir}, {"MEASUREMENT": measurement})
+    refuse_input_as_output({"--output": outdir}, {"MEASUREMENT": measurement, "--mapping": mapping})
     base, effects = load_params(params_file, param_items)
     if effects:
         raise click.BadParameter("run finds the effects itself: a params file holds no [effects] here",
@@ -58,12 +56,25 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
         base = base.replace(m_w=1000.0)
     opt = RunOptions(band=tuple(band) if band else None, exp_end=None if no_exp_window else exp_end, seed=seed,
                      noise_floor_pct=noise_floor_pct, max_effects=max_effects, pressure_from_file=not p0_from_params)
-    summary = run_folder(measurement, outdir, opt, params=base, overwrite=overwrite,
-                         progress=_stage_message)
+    from ..frffile import is_uff
+
+    bar = StageProgress("run", ["read FRFs" if is_uff(measurement) else "frf", "lsce", "identify", "diagnose"])
+    try:
+        summary = run_folder(measurement, outdir, opt, params=base, overwrite=overwrite, progress=bar,
+                             mapping=mapping)
+    finally:
+        bar.close()
     if as_json:
         echo_json(summary)
         return
-    click.echo(f"{summary['measurement']}: {summary['modes_found']} modes, {len(summary['rejected_hits'])} rejected hit(s)")
+    src = summary.get("frf_source")
+    if src:
+        click.echo(f"{summary['measurement']}: UFF FRFs ({src['form']}, {src['unit_in_file']} × {src['to_si']:.6g} "
+                   f"to SI, from {src['from']}; points from {src['geometry']}); started at lsce: "
+                   f"{summary['modes_found']} modes")
+    else:
+        click.echo(f"{summary['measurement']}: {summary['modes_found']} modes, "
+                   f"{len(summary['rejected_hits'])} rejected hit(s)")
     click.echo("identified: " + ", ".join(f"{k} = {v['value']:.5g} ± {v['std_error']:.2g}"
                                           for k, v in summary["identified"].items()))
     click.echo(f"diagnosis: {summary['verdict']}")
