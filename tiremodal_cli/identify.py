@@ -202,6 +202,12 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
     return modes, skipped
 
 
+#: a row explaining less of the physical response than lsce's own cut-off
+#: (``ModalOptions.min_significance``) was kept by lsce for its share in its order group
+#: alone: a mode, but its order is not trusted for a fit
+WEAK_SIGNIFICANCE = 0.05
+
+
 def _row_problem(get, n, b, f, min_confidence, min_mpc) -> str | None:
     """Why a table row cannot enter the fit (None when it can)."""
     conf, order_ok, mpc = get("n_confidence"), get("in_order"), get("mpc")
@@ -210,6 +216,11 @@ def _row_problem(get, n, b, f, min_confidence, min_mpc) -> str | None:
     crowd = get("crowd")
     if crowd is not None and str(crowd).strip().lower() in ("true", "1"):  # lsce: the order cannot be told
         return f"in a crowd: its order is one of {get('n_candidates') or 'several'}"
+    sig = get("significance")
+    if sig is not None and float(sig) < WEAK_SIGNIFICANCE:
+        # lsce keeps a mode significant in its own order group only; its order is read from
+        # a shape that explains little of the measured response
+        return f"significance {float(sig):.3f} < {WEAK_SIGNIFICANCE}: its order is read from a weak shape"
     if conf is not None and float(conf) < min_confidence:
         return f"n_confidence {float(conf):.2f} < {min_confidence}"
     if order_ok is not None and str(order_ok).strip().lower() in ("false", "0"):
