@@ -95,9 +95,10 @@ class FitOptions:
     start: dict = field(default_factory=dict)
     search: str = "global"
     safeguard: int = 15
-    #: more starts of a "local" search (least squares from each too; the best end wins):
-    #: ``diagnose`` adds the nominal parameters, so that a candidate whose optimum lies far
-    #: from the current model's (a Timoshenko tread's EI) is still found
+    #: more starts of a "local" search, tried when its end has a parameter pinned to a search
+    #: limit (least squares from each; the best end wins): ``diagnose`` adds the nominal
+    #: parameters, so that a candidate whose optimum lies far from the current model's (a
+    #: Timoshenko tread's EI) is still found
     extra_starts: tuple = ()
 
 
@@ -395,7 +396,10 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
         x = scipy.optimize.least_squares(residuals, x0, **lsq).x
     elif opt.search == "local" and x0 is not None:
         x = _local_search(objective_batch, residuals, x0, logb, opt, lsq, history)
-        for extra in opt.extra_starts:
+        # a parameter pinned to a search limit is the mark of a search caught in a degenerate
+        # basin (a Timoshenko tread's EI driven to 0): then try the other starts too
+        pinned = np.any((x - logb[:, 0] < 1e-3) | (logb[:, 1] - x < 1e-3))
+        for extra in opt.extra_starts if pinned else ():
             x1 = np.array([np.log(extra[n]) if extra.get(n, 0) > 0 else x[i] for i, n in enumerate(names)])
             x1 = np.clip(x1, logb[:, 0] + 1e-9, logb[:, 1] - 1e-9)
             x1 = scipy.optimize.least_squares(residuals, x1, **lsq).x
