@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from tiremodal_cli.frf import FRFOptions, compute_frf
-from tiremodal_cli.hits import bounce_in_pulse, double_hit
+from tiremodal_cli.hits import bounce_in_pulse, clipped_samples, double_hit, is_clipped, pulse_extent
 from tiremodal_cli.model import TyreParameters
 from tiremodal_cli.simulate import SimulationConfig, simulate
 
@@ -73,3 +73,89 @@ def test_a_check_that_cannot_run_is_said(clean, caplog):
     assert "hit check not run" in caplog.text
     r = compute_frf(clean, FRFOptions(band_hz=(0, 320.0)))
     assert r.meta["checks_not_run"] == ["consistency of the hits: needs at least 3 hits per point, the test has 2"]
+
+
+# --- direct unit tests of the record checks (clipping, second blow, pulse extent) -------------
+# Truths: an ADC in overload holds its full-scale value (a clipped record sits at its extreme
+# for several samples); a hammer pushes, so a bounce is a second pulse of the blow's sign
+# after the first has ended; a half-sine pulse sin(πt/T) exceeds a fraction c of its peak
+# for the middle (1 − 2 arcsin(c)/π) of its duration.
+
+FS_U = 10240.0
+
+
+def _half_sine(n, at_s, width_s, amp=1.0, fs=FS_U):
+    t = np.arange(n) / fs - at_s
+    return np.where((t > 0) & (t < width_s), amp * np.sin(np.pi * t / width_s), 0.0)
+
+
+def _response(n, fs=FS_U, seed=0):
+    """A noisy two-mode decay (no sample ties at its peak)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / fs
+    x = np.exp(-8 * t) * np.sin(2 * np.pi * 97.3 * t) + 0.4 * np.exp(-15 * t) * np.sin(2 * np.pi * 311.1 * t + 1)
+    return x + 1e-3 * rng.normal(size=n)
+
+
+def test_a_clipped_response_is_found_and_its_held_samples_counted():
+    x = _response(4096)
+    limit = 0.6 * np.abs(x).max()
+    clipped = np.clip(x, -limit, limit)
+    held = np.count_nonzero(np.abs(x) >= limit)  # the samples the converter held at full scale
+    assert held >= 3
+    assert clipped_samples(clipped) == held
+    assert is_clipped(clipped)
+    assert clipped_samples(x) == 0 and not is_clipped(x)
+
+
+def test_clipping_counts_per_record_along_any_axis():
+    recs = np.stack([_response(2048, seed=s) for s in range(4)])  # (4, 2048)
+    recs[2] = np.clip(recs[2], -0.5, 0.5)
+    assert list(is_clipped(recs)) == [False, False, True, False]
+    assert list(is_clipped(recs.T, axis=0)) == [False, False, True, False]
+
+
+def test_two_separate_ties_at_the_peak_are_not_clipping_but_an_adjacent_pair_is():
+    """min_run = 2 adjacent, or min_count = 3 anywhere (documented defaults)."""
+    x = _response(1024)
+    pk = np.abs(x).max()
+    two_apart = x.copy()
+    two_apart[[100, 500]] = [pk * 1.1, -pk * 1.1]
+    assert clipped_samples(two_apart) == 0
+    adjacent = x.copy()
+    adjacent[[100, 101]] = pk * 1.1
+    assert clipped_samples(adjacent) == 2
+    three = x.copy()
+    three[[100, 400, 800]] = pk * 1.1
+    assert clipped_samples(three) == 3
+
+
+def test_pulse_extent_of_a_half_sine_matches_its_analytic_width():
+    n, at, w = 4096, 0.05, 0.002
+    f = _half_sine(n, at, w)
+    start, stop = pulse_extent(f, FS_U, threshold=0.05)
+    above = w * (1 - 2 * np.arcsin(0.05) / np.pi)  # time above 5 % of the peak
+    assert abs((stop - start) / FS_U - above) <= 2 / FS_U
+    assert abs(start / FS_U - (at + w * np.arcsin(0.05) / np.pi)) <= 1.5 / FS_U
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_a_second_blow_after_the_pulse_is_a_double_hit_a_clean_hit_passes(sign):
+    rng = np.random.default_rng(8)
+    n = 8192
+    first = _half_sine(n, 0.02, 0.001, sign)
+    noise = 2e-3 * rng.normal(size=n)
+    clean = first + noise
+    bounce = first + _half_sine(n, 0.032, 0.001, 0.35 * sign) + noise  # 35 % blow 12 ms later
+    small = first + _half_sine(n, 0.032, 0.001, 0.10 * sign) + noise  # 10 % < min_relative 20 %
+    flags = double_hit(np.stack([clean, bounce, small]), FS_U)
+    assert list(flags) == [False, True, False]
+
+
+def test_ringing_of_the_opposite_sign_is_not_a_second_blow():
+    """A pull of 50 % after a push is filter ringing, not a hammer (which only pushes)."""
+    n = 4096
+    f = _half_sine(n, 0.02, 0.001) + _half_sine(n, 0.0215, 0.001, -0.5)
+    assert not double_hit(f, FS_U)
+    g = _half_sine(n, 0.02, 0.001) + _half_sine(n, 0.0215, 0.001, +0.5)
+    assert double_hit(g, FS_U)

@@ -19,7 +19,6 @@ def test_mac_prints_values_only_where_readable():
         M = rng.uniform(size=(k, k))
         ax = plots.plot_mac(M)
         assert len(ax.texts) == texts
-        plots.plt.close(ax.figure)
 
 
 def test_order_axes_tick_at_integers():
@@ -30,7 +29,6 @@ def test_order_axes_tick_at_integers():
     lo, hi = ax.get_xlim()
     ticks = [t for t in ax.get_xticks() if lo <= t <= hi]
     assert ticks and all(float(t).is_integer() for t in ticks)
-    plots.plt.close(ax.figure)
 
 
 @pytest.mark.parametrize("history", [[(g, 0.12 * 0.9 ** g + 0.09) for g in range(1, 70)],
@@ -49,7 +47,6 @@ def test_convergence_has_a_y_label_and_tick_labels_inside_the_figure(history):
     for t in shown + shown_x + [ax.yaxis.label, ax.xaxis.label]:
         b = t.get_window_extent(r)
         assert b.x0 >= fb.x0 - 1 and b.x1 <= fb.x1 + 1 and b.y0 >= fb.y0 - 1 and b.y1 <= fb.y1 + 1, t.get_text()
-    plots.plt.close(fig)
 
 
 def test_stabilization_has_one_panel_per_order_group():
@@ -68,7 +65,6 @@ def test_stabilization_has_one_panel_per_order_group():
     for ax, g in zip(visible, groups):  # each panel holds its own group's poles and mode
         xs = np.concatenate([ln.get_xdata() for ln in ax.lines if ln.get_linestyle() == "None"])
         assert np.all(np.abs(xs - (50 + 20 * g)) < 2)
-    plots.plt.close(fig)
 
 
 def test_names_table_covers_the_model_and_the_effects():
@@ -98,4 +94,3 @@ def test_campaign_repeats_do_not_overplot_and_effects_are_shown():
     assert len(set(np.round(x, 9))) == 5  # five tests, five places
     assert np.all(np.abs(x[:3] - 700) <= 200 / 8 + 1e-9) and np.all(np.abs(x[3:] - 900) <= 200 / 8 + 1e-9)
     assert list(axes[0].get_xticks()) == [700.0, 900.0]
-    plots.plt.close(fig)
