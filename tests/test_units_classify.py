@@ -150,10 +150,6 @@ def test_crowd_when_an_alias_order_falls_in_the_half_power_band():
     assert narrow[2].n_confidence == pytest.approx(1.0, abs=1e-9)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "contract violation (spatial.harmonic_design/decompose): on 12 uniform points starting at "
-    "0.2 rad the order-6 cos and sin columns are collinear and both kept, so order_energy drops "
-    "the top order; a pure cos 6θ is fitted by nothing and its 'order' is rounding noise (read as 4)"))
 def test_grid_top_order_is_read_on_a_uniform_grid_from_any_start():
     th = _grid(12, offset=0.2)
     S = _shapes(th, [(6, 0.5)])

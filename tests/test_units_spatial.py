@@ -131,14 +131,6 @@ def test_fewer_than_three_points_is_refused():
         decompose(np.ones((1, 2, 4), complex), _uniform(2))
 
 
-NYQUIST_OFFSET_REASON = (
-    "contract violation: on N uniform points starting at θ0 with sin(Nθ0/2)·cos(Nθ0/2) ≠ 0 "
-    "(e.g. 12 points from 0.2 rad) the order-N/2 cos and sin columns are collinear, neither "
-    "vanishes, so harmonic_design keeps both (N + 1 columns) and decompose drops the whole top "
-    "order: the groups no longer add back to H as documented ('H itself on a uniform grid')")
-
-
-@pytest.mark.xfail(strict=True, reason=NYQUIST_OFFSET_REASON)
 def test_uniform_grid_from_any_start_reconstructs_any_data():
     """The DFT's completeness does not depend on where the first point is: 12 equally
     spaced points from 0.2 rad span every function of the points, order 6 included."""
@@ -149,7 +141,6 @@ def test_uniform_grid_from_any_start_reconstructs_any_data():
     assert np.allclose(total, H, atol=1e-12)
 
 
-@pytest.mark.xfail(strict=True, reason=NYQUIST_OFFSET_REASON)
 def test_grid_top_order_on_a_uniform_grid_from_any_start():
     th = _uniform(12, offset=0.2)
     H = _order_signal(th, 6, 0.0, np.ones(2, dtype=complex))

@@ -28,7 +28,8 @@ def max_order(n_points: int) -> int:
 def harmonic_design(angles_rad, n_max: int) -> tuple[np.ndarray, list[tuple[int, str]]]:
     """Columns 1, cos θ, sin θ, …, cos n_max θ, sin n_max θ at the given angles.
 
-    A sine column that vanishes on the grid (n = N/2 on N uniform points) is left out.
+    A column that vanishes on the grid, or a sine collinear with its cosine (n = N/2 on N
+    uniform points, from any first angle), is left out: one column for that order.
 
     Returns
     -------
@@ -36,12 +37,19 @@ def harmonic_design(angles_rad, n_max: int) -> tuple[np.ndarray, list[tuple[int,
     """
     th = np.asarray(angles_rad, dtype=float)
     cols, names = [np.ones_like(th)], [(0, "cos")]
+    tiny = 1e-8 * np.sqrt(th.size)
     for n in range(1, n_max + 1):
-        for kind, fn in (("cos", np.cos), ("sin", np.sin)):
-            c = fn(n * th)
-            if np.linalg.norm(c) > 1e-8 * np.sqrt(th.size):
-                cols.append(c)
-                names.append((n, kind))
+        pair = [(kind, fn(n * th)) for kind, fn in (("cos", np.cos), ("sin", np.sin))]
+        pair = [(kind, c) for kind, c in pair if np.linalg.norm(c) > tiny]
+        if len(pair) == 2:
+            (_, c), (_, sn) = pair
+            # n = N/2 on N uniform points from any start: cos and sin are both ±1 times a
+            # constant, one column; keep the larger
+            if abs(c @ sn) >= (1 - 1e-10) * np.linalg.norm(c) * np.linalg.norm(sn):
+                pair = [max(pair, key=lambda kc: np.linalg.norm(kc[1]))]
+        for kind, c in pair:
+            cols.append(c)
+            names.append((n, kind))
     return np.column_stack(cols), names
 
 
