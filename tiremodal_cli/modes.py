@@ -566,7 +566,7 @@ def _merge(found, opt, alpha=SAME_POLE_ALPHA):
     serves both groups — with a broken symmetry the weaker copy is at times the better
     estimate),
     or lies within :data:`SAME_POLE_FLOOR_BW` of a bandwidth (the estimator's bias) —
-    and adding its share keeps the shape as much a normal mode (MPC) as either part;
+    and adding its share does not turn a normal mode (MPC ≥ 0.5) into none;
     two modes of neighbouring orders (the opposite branch's n = 0 and 1 lie 0.15 % apart,
     a twentieth of a bandwidth) are rejected by their own data, however close. The merged
     mode's shape is the sum of the groups' shares, its pole the dominant group's.
@@ -596,10 +596,10 @@ def _merge(found, opt, alpha=SAME_POLE_ALPHA):
             if found[j][1] not in groups_seen and (abs(fn[j] - fn[i]) <= SAME_POLE_FLOOR_BW * 2 * zeta[i] * fn[i]
                                                    or found[j][5](found[i][0]) <= thr
                                                    or found[i][5](found[j][0]) <= thr):
-                # one normal mode seen twice: its shares add up in phase (the sum is no less
-                # a normal mode than either part)
+                # one normal mode seen twice: its shares add up in phase; a share that would
+                # turn a normal mode (MPC ≥ 0.5, identify's gate) into none is not its own
                 now = sum(found[q][2] for q in groups_seen.values())
-                if mpc(now + found[j][2]) >= min(mpc(now), mpc(found[j][2])):
+                if not (mpc(now) >= 0.5 > mpc(now + found[j][2])):
                     groups_seen[found[j][1]] = j
         phys = sum(found[j][2] for j in groups_seen.values())
         tot = sum(energy[j] for j in groups_seen.values())
