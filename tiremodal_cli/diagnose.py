@@ -362,7 +362,8 @@ def _judge(cand_fit, current, names, modes, opt, bounds, n_tried, evidence_ok=Tr
     for nm in names:
         lo, hi, hard = (*bounds[nm], False)[:3]
         v = params[nm]["value"]
-        if v <= lo * 1.001 or (v >= hi * 0.999 and not hard):
+        # a lower bound of 0 is reached as a vanishing value (the search is in log parameters)
+        if v <= max(lo * 1.001, 1e-6 * hi) or (v >= hi * 0.999 and not hard):
             return fields, f"{nm} = {v:.4g} sits at a limit of its search range [{lo:.3g}, {hi:.3g}]"
     return fields, None
 
