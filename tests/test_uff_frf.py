@@ -106,19 +106,17 @@ def _modes(folder):
 
 
 def test_testlab_uff_gives_the_same_modes_and_fit(uff_runs):
-    """Same modes: every mode of the time-data run below the spatial Nyquist order N/2
-    (34 points: n < 17) is found again with its frequency within 1e-6 and damping within
-    1e-4 (relative) and the same n and branch; no other mode appears. (At n = N/2 the sine
-    component is sampled at its zeros: that order's decision turns on the points' angles to
-    1e-7 rad, which the geometry's six significant digits do not give — measured: the
-    sample's one n = 17 mode is found with the run's own angles, not with the file's.)
+    """Same modes: every mode of the time-data run is found again with its frequency within
+    1e-6 and damping within 1e-4 (relative) and the same n and branch; no other mode
+    appears. (At n = N/2 the sine component is sampled at its zeros and that order's reading
+    turns on the points' angles to 1e-7 rad: the geometry's six digits give it because points
+    within their rounding of a uniform grid are put on it, frffile._uniform_grid.)
     Same fit: identify's and the final model's parameters within one standard error of
     each other, the same effect adopted, the RMS errors after apart by < 0.01 % (points)."""
     d, a, b = uff_runs["dir"], uff_runs["orig"], uff_runs["uff"]
-    n_nyq = a["n_points"] / 2
-    ma = [m for m in _modes(d / "orig") if m["n"] == "" or int(m["n"]) < n_nyq]
-    mb = [m for m in _modes(d / "uff") if m["n"] == "" or int(m["n"]) < n_nyq]
+    ma, mb = _modes(d / "orig"), _modes(d / "uff")
     assert len(ma) >= 30 and len(ma) == len(mb)
+    assert any(m["n"] and int(m["n"]) == a["n_points"] // 2 for m in ma)  # the order N/2 is in it
     for x, y in zip(ma, mb):
         assert float(y["frequency_hz"]) == pytest.approx(float(x["frequency_hz"]), rel=1e-6)
         assert float(y["damping_ratio"]) == pytest.approx(float(x["damping_ratio"]), rel=1e-4)
@@ -263,3 +261,23 @@ def test_geometry_in_another_plane_and_off_any_plane(tmp_path, exact_sim):
     np.testing.assert_allclose(np.angle(np.exp(1j * (got.channel_angle - r.channel_angle))), 0, atol=1e-5)
     with pytest.raises(DataFormatError, match="do not lie in one coordinate plane"):
         read_frf_uff(write_testlab_uff(tmp_path / "tilt.uff", r, tilt=0.2))
+
+
+def test_points_on_a_rounded_uniform_grid_are_put_on_it_and_hand_marked_ones_are_not():
+    """Six significant digits (dataset 15) of a uniform 34-point grid from 10°: the angles come
+    back exactly uniform; a grid marked by hand (1 mm errors on a 0.65 m radius) stays as
+    measured."""
+    from tiremodal_cli.frffile import _uniform_grid
+
+    N, R = 34, 0.65
+    th = np.deg2rad(10) + 2 * np.pi * np.arange(N) / N
+    rounded = {k + 1: (float(np.arctan2(float(f"{R * np.sin(t):.5e}"), float(f"{R * np.cos(t):.5e}"))), R)
+               for k, t in enumerate(th)}
+    got = np.array([v[0] for v in _uniform_grid(rounded, list(range(1, N + 1))).values()])
+    # exactly uniform (the spacing 2π/N to rounding); the grid's start within the file's rounding
+    np.testing.assert_allclose(np.angle(np.exp(1j * np.diff(got))), 2 * np.pi / N, atol=1e-12)
+    assert abs(np.angle(np.exp(1j * (got[0] - th[0])))) < 1e-6
+    assert max(abs(rounded[k + 1][0] - np.angle(np.exp(1j * th[k]))) for k in range(N)) > 1e-8  # it was off
+    rng = np.random.default_rng(3)
+    marked = {k + 1: (float(t + rng.normal(0, 1e-3 / R)), R) for k, t in enumerate(th)}
+    assert _uniform_grid(marked, list(range(1, N + 1))) == marked
