@@ -233,6 +233,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1217 / 1342 (91 %) | 28 / 1557 (1.8 %) | 0 | 0 / 14 | 4 / 14 | |
 | 2026-11-23, end of session 4 | rim from the data, the paper's comparison (main at 947963a; the ruler counting f ≤ fs/2.56) | paper | 1076 / 1236 (87 %) | 33 / 1389 (2.4 %) | 0 | 14 / 14 | 5 / 13 | 3.0 min |
 | | | ring | 1194 / 1342 (89 %) | 32 / 1557 (2.1 %) | 0 | 14 / 14 | 5 / 14 | |
+| 2026-11-23, end of session 5 | the merge by the poles' data, alias rules (#14); the robust base fit, set-aside modes as evidence, extensible belt, rim fixture, the ring terms of the tangential effect (#15) | paper | 1133 / 1212 (93 %) | 33 / 1440 (2.3 %) | 0 | 14 / 14 | 8 / 13 | 3.3 min |
+| | | ring | 1252 / 1334 (94 %) | 30 / 1637 (1.8 %) | 0 | 14 / 14 | 6 / 14 | |
 """
 
 
