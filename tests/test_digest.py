@@ -1,0 +1,174 @@
+"""The bundled sample's ``run`` outputs against a stored digest (behaviour unchanged).
+
+``tests/data/sample_run_digest.json`` holds, for every output of ``run`` on
+``sample_data/gl073a_sim.h5`` with its defaults: every number and string of the JSON
+outputs and of ``modes.csv`` (a path → value table), and for every dataset of ``frf.h5``
+and ``modal.h5`` its shape, dtype and three float64 sums (of the values, of their
+magnitudes, and weighted by a ramp, so that a moved or changed value shows), plus the
+files' attributes. What is left out is what must differ between two identical runs:
+times, paths, checksums of files (they hold paths and times), the provenance block.
+
+A refactor must leave this unchanged; a change of behaviour regenerates it on purpose,
+in its own commit that says why::
+
+    python tests/test_digest.py --write
+
+Tolerances: 1e-6 relative on numbers (a different BLAS or CPU changes the last digits
+of an optimiser's answer, not the sixth), 1e-5 on the sums of single-precision arrays.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import sys
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLE = ROOT / "sample_data" / "gl073a_sim.h5"
+DIGEST = ROOT / "tests" / "data" / "sample_run_digest.json"
+
+#: keys whose values differ between two identical runs (time, place, checksums of files)
+VOLATILE = {"seconds", "provenance", "created_utc", "created", "tiremodal_version", "version", "git_commit",
+            "command", "python", "numpy", "scipy", "platform", "input_file", "measurement", "path",
+            "input_sha256", "sha256", "outputs", "host", "user"}
+
+
+def _leaves(obj, prefix=""):
+    """Flatten JSON into {path: number | string | bool | None}, volatile keys left out."""
+    out = {}
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            if k not in VOLATILE:
+                out.update(_leaves(v, f"{prefix}/{k}"))
+    elif isinstance(obj, list):
+        for i, v in enumerate(obj):
+            out.update(_leaves(v, f"{prefix}[{i}]"))
+    else:
+        out[prefix] = obj
+    return out
+
+
+def _h5_digest(path):
+    out = {}
+
+    def attrs(name, obj):
+        for k, v in obj.attrs.items():
+            if k in VOLATILE:
+                continue
+            v = v.decode() if isinstance(v, bytes) else v
+            v = v.tolist() if isinstance(v, np.ndarray) else v.item() if isinstance(v, np.generic) else v
+            out[f"{name}@{k}"] = v
+
+    def visit(name, obj):
+        attrs(name, obj)
+        if isinstance(obj, h5py.Dataset):
+            a = obj[()]
+            if a.dtype.kind in "SOU":
+                out[name] = {"shape": list(a.shape), "dtype": "str",
+                             "values": [x.decode() if isinstance(x, bytes) else str(x) for x in np.ravel(a)]}
+                return
+            x = np.asarray(a, dtype=np.complex128 if a.dtype.kind == "c" else np.float64).ravel()
+            finite = np.isfinite(x)
+            xf = np.where(finite, x, 0)
+            ramp = np.linspace(1.0, 2.0, x.size) if x.size else x.real
+            out[name] = {"shape": list(a.shape), "dtype": str(a.dtype), "n_nonfinite": int((~finite).sum()),
+                         "sum": [float(np.sum(xf).real), float(np.sum(xf).imag)],
+                         "sum_abs": float(np.sum(np.abs(xf))),
+                         "ramp": [float(np.sum(ramp * xf).real), float(np.sum(ramp * xf).imag)]}
+
+    with h5py.File(path, "r") as f:
+        attrs("/", f)
+        f.visititems(visit)
+    return out
+
+
+def _csv_digest(path):
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    return {f"[{i}]/{k}": v for i, r in enumerate(rows) for k, v in r.items()}
+
+
+def digest(outdir) -> dict:
+    """The digest of one run folder."""
+    outdir = Path(outdir)
+    d = {}
+    for name in ("identify.json", "diagnosis.json", "sensitivity.json"):
+        d[name] = _leaves(json.loads((outdir / name).read_text()))
+    d["run.json"] = _leaves(json.loads((outdir / "run.json").read_text())["summary"])
+    d["modes.csv"] = _csv_digest(outdir / "modes.csv")
+    for name in ("frf.h5", "modal.h5"):
+        d[name] = _h5_digest(outdir / name)
+    return d
+
+
+def _sample_run(outdir):
+    from tiremodal_cli.pipeline import run
+
+    run(SAMPLE, outdir)
+    return digest(outdir)
+
+
+def _close(a, b, rtol):
+    if isinstance(a, bool) or isinstance(b, bool) or a is None or b is None:
+        return a == b
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        if isinstance(a, float) and isinstance(b, float) and np.isnan(a) and np.isnan(b):
+            return True
+        return bool(np.isclose(a, b, rtol=rtol, atol=1e-12))
+    if isinstance(a, str) and isinstance(b, str):
+        if a == b:
+            return True
+        try:
+            return bool(np.isclose(float(a), float(b), rtol=rtol, atol=1e-12))
+        except ValueError:
+            return a == b
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_close(x, y, rtol) for x, y in zip(a, b))
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_close(a[k], b[k], rtol) for k in a)
+    return a == b
+
+
+def differences(got: dict, want: dict) -> list[str]:
+    """Human-readable differences between two digests (empty when they agree)."""
+    out = []
+    for f in sorted(set(got) | set(want)):
+        g, w = got.get(f, {}), want.get(f, {})
+        rtol = 1e-5 if f.endswith(".h5") else 1e-6
+        for k in sorted(set(g) | set(w)):
+            if k not in g or k not in w:
+                out.append(f"{f} {k}: {'missing now' if k not in g else 'new'}")
+            elif not _close(g[k], w[k], rtol):
+                out.append(f"{f} {k}: {str(g[k])[:120]} != stored {str(w[k])[:120]}")
+    return out
+
+
+def test_sample_run_matches_the_stored_digest(tmp_path):
+    want = json.loads(DIGEST.read_text())
+    diff = differences(_sample_run(tmp_path / "run"), want)
+    assert not diff, f"{len(diff)} differences from {DIGEST.name}:\n" + "\n".join(diff[:40])
+
+
+def test_the_digest_sees_a_changed_number(tmp_path):
+    """The comparison can fail: one number moved by 1e-5 relative is a difference."""
+    want = json.loads(DIGEST.read_text())
+    got = json.loads(json.dumps(want))
+    key = next(k for k, v in got["identify.json"].items() if isinstance(v, float) and v != 0)
+    got["identify.json"][key] *= 1 + 1e-5
+    assert differences(got, want) == [f"identify.json {key}: {got['identify.json'][key]} "
+                                      f"!= stored {want['identify.json'][key]}"]
+
+
+if __name__ == "__main__":
+    if sys.argv[1:] != ["--write"]:
+        sys.exit("usage: python tests/test_digest.py --write")
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        DIGEST.write_text(json.dumps(_sample_run(Path(tmp) / "run"), indent=0, sort_keys=True) + "\n")
+    print(f"wrote {DIGEST}")
