@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from tiremodal_cli.batch import load_config, run_batch
-from tiremodal_cli.pipeline import run
-from tiremodal_cli.simulate import simulate_campaign
+from tiremodal_cli.workflow.batch import load_config, run_batch
+from tiremodal_cli.workflow.pipeline import run
+from tiremodal_cli.tyre.simulate import simulate_campaign
 
 
 def main() -> None:

@@ -31,10 +31,10 @@ from pathlib import Path
 import numpy as np
 import scipy.signal
 
-from tiremodal_cli.frf import compute_frf
-from tiremodal_cli.measurement import write_measurement
-from tiremodal_cli.model import TyreParameters
-from tiremodal_cli.simulate import SimulationConfig, simulate
+from tiremodal_cli.frf.estimate import compute_frf
+from tiremodal_cli.io.measurement import write_measurement
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 
 def median_times(fns, repeat):

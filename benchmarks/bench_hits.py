@@ -21,10 +21,10 @@ import time
 
 import numpy as np
 
-from tiremodal_cli.frf import FRFOptions, compute_frf
-from tiremodal_cli.measurement import Measurement
-from tiremodal_cli.model import TyreParameters
-from tiremodal_cli.simulate import SimulationConfig, _clip, simulate
+from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
+from tiremodal_cli.io.measurement import Measurement
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.simulate import SimulationConfig, _clip, simulate
 
 BINS_MS = ((1.0, 2.0), (2.0, 3.0), (3.0, 5.0), (5.0, 8.0))
 SETUPS = {
@@ -88,7 +88,7 @@ def run(fs: int, seeds=range(4), n_double=48, n_clip=12):
 
 def false_alarms(seeds=range(20), noises=(0.005, 0.05)):
     """Clean tests (12 points × 3 hits) with any hit flagged by the bounce-in-pulse check."""
-    from tiremodal_cli.hits import bounce_in_pulse
+    from tiremodal_cli.frf.hits import bounce_in_pulse
 
     n = k = hits = 0
     for fs in (1024, 2048):

@@ -39,9 +39,9 @@ import numpy as np
 
 from threadpoolctl import threadpool_limits
 
-from tiremodal_cli.lsce import principal_responses, sweep
-from tiremodal_cli.model import TyreParameters, frf, paper_damping, solve_modes
-from tiremodal_cli.modes import ModalOptions, estimate_modes
+from tiremodal_cli.modal.lsce import principal_responses, sweep
+from tiremodal_cli.tyre.model import TyreParameters, frf, paper_damping, solve_modes
+from tiremodal_cli.modal.modes import ModalOptions, estimate_modes
 
 
 def make_frfs(n_lines, seed=1):

@@ -1,4 +1,4 @@
-"""pLSCF (ours, :mod:`tiremodal_cli.plscf`) against sdypy-EMA's LSCF on the real beam.
+"""pLSCF (ours, :mod:`tiremodal_cli.modal.plscf`) against sdypy-EMA's LSCF on the real beam.
 
     python benchmarks/bench_plscf.py [--repeat 3]
 
@@ -24,7 +24,7 @@ from threadpoolctl import threadpool_limits
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tiremodal_cli.plscf import sweep_plscf  # noqa: E402
+from tiremodal_cli.modal.plscf import sweep_plscf  # noqa: E402
 
 BEAM = ROOT / "tests" / "data" / "beam"
 REF = np.array([51.52, 142.18, 278.66, 460.40, 687.16, 958.53])

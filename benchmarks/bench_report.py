@@ -23,11 +23,11 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=3)
     a = ap.parse_args()
-    from tiremodal_cli.export import shape_set
-    from tiremodal_cli.modalfile import read_modal
-    from tiremodal_cli.pipeline import run
+    from tiremodal_cli.io.export import shape_set
+    from tiremodal_cli.io.modalfile import read_modal
+    from tiremodal_cli.workflow.pipeline import run
     from tiremodal_cli.plots import mode_gif, mode_gifs
-    from tiremodal_cli.report import report_run
+    from tiremodal_cli.workflow.report import report_run
 
     with tempfile.TemporaryDirectory() as d:
         out = Path(d) / "run"

@@ -24,8 +24,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tiremodal_cli.errors import DataFormatError  # noqa: E402
-from tiremodal_cli.lsfd import synthesize  # noqa: E402
-from tiremodal_cli.modes import ModalOptions, estimate_modes  # noqa: E402
+from tiremodal_cli.modal.lsfd import synthesize  # noqa: E402
+from tiremodal_cli.modal.modes import ModalOptions, estimate_modes  # noqa: E402
 
 
 def noise_only(seed, n_frf):

@@ -18,10 +18,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-from tiremodal_cli.diagnose import DiagnoseOptions, diagnose
-from tiremodal_cli.identify import FitOptions, fit, modes_from_rows
-from tiremodal_cli.measurement import open_measurement
-from tiremodal_cli.model import TyreParameters
+from tiremodal_cli.diagnose.loop import DiagnoseOptions, diagnose
+from tiremodal_cli.tyre.fit import FitOptions, fit, modes_from_rows
+from tiremodal_cli.io.measurement import open_measurement
+from tiremodal_cli.tyre.model import TyreParameters
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -30,7 +30,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tiremodal_cli.validation import FACTORS, REFERENCE, Case, matrix, run_case  # noqa: E402
+from tiremodal_cli.workflow.validation import FACTORS, REFERENCE, Case, matrix, run_case  # noqa: E402
 
 
 def _one(case_dict: dict, keep: str | None) -> dict:
@@ -146,7 +146,7 @@ def datasheet(records: list[dict]) -> str:
                "(`modes.SAME_POLE_FLOOR_BW`).\n")
     out.append("| generator | modes found | median | 99th percentile | largest | share above the floor |")
     out.append("|---|---|---|---|---|---|")
-    from tiremodal_cli.modes import SAME_POLE_FLOOR_BW
+    from tiremodal_cli.modal.modes import SAME_POLE_FLOOR_BW
 
     for g in sorted({r["case"]["generator"] for r in ok}):
         e = np.array([x for r in ok if r["case"]["generator"] == g for x in r.get("freq_err_bw", [])])

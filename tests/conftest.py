@@ -7,8 +7,8 @@ import pytest
 from click.testing import CliRunner
 
 from tiremodal_cli.cli.main import cli
-from tiremodal_cli.model import TyreParameters
-from tiremodal_cli.simulate import SimulationConfig, simulate
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 
 def run_cli(args, **kw):

@@ -21,12 +21,12 @@ import pytest
 from click.testing import CliRunner
 
 from tiremodal_cli.cli.main import cli
-from tiremodal_cli.frf import FRFOptions, compute_frf
-from tiremodal_cli.frffile import write_frf
-from tiremodal_cli.measurement import read_measurement, write_measurement
-from tiremodal_cli.modalfile import write_modal
-from tiremodal_cli.modes import ModalOptions, modal_table_from_frf
-from tiremodal_cli.simulate import SimulationConfig, simulate
+from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
+from tiremodal_cli.io.frffile import write_frf
+from tiremodal_cli.io.measurement import read_measurement, write_measurement
+from tiremodal_cli.io.modalfile import write_modal
+from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 SAMPLE_CSV = Path(__file__).resolve().parents[1] / "sample_data" / "paper_table_a1.csv"
 

@@ -24,14 +24,14 @@ import h5py
 import numpy as np
 import pytest
 
-from tiremodal_cli.batch import (BatchConfig, BatchTest, discover, load_config, read_summary, run_batch,
+from tiremodal_cli.workflow.batch import (BatchConfig, BatchTest, discover, load_config, read_summary, run_batch,
                                  source_sha256)
 from tiremodal_cli.cli.simulate import _toml
 from tiremodal_cli.errors import ParameterError
-from tiremodal_cli.ingest.uff import write_uff_time
-from tiremodal_cli.measurement import write_measurement
-from tiremodal_cli.pipeline import MANIFEST, RunOptions, is_complete
-from tiremodal_cli.simulate import CAMPAIGN_CONFIG, Faults, simulate, simulate_campaign
+from tiremodal_cli.io.ingest.uff import write_uff_time
+from tiremodal_cli.io.measurement import write_measurement
+from tiremodal_cli.workflow.pipeline import MANIFEST, RunOptions, is_complete
+from tiremodal_cli.tyre.simulate import CAMPAIGN_CONFIG, Faults, simulate, simulate_campaign
 
 from conftest import run_cli
 
@@ -362,7 +362,7 @@ def test_relative_paths_reach_a_scheduler_absolute(tmp_path, monkeypatch):
     (a relative one failed every test and left '.partial' in the worker's folder)."""
     import contextlib
 
-    import tiremodal_cli.batch as batch
+    import tiremodal_cli.workflow.batch as batch
 
     simulate_campaign(tmp_path / "data" / "a", [8e5], seed=1)
     elsewhere = tmp_path / "worker_cwd"

@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tiremodal_cli.diagnose import DiagnoseOptions, diagnose
-from tiremodal_cli.effects import resolve_effects
-from tiremodal_cli.frf import FRFOptions, compute_frf
-from tiremodal_cli.measurement import write_measurement
-from tiremodal_cli.modalfile import to_rows
-from tiremodal_cli.model import TyreParameters, branch_frequencies, point_mass_pairs, solve_modes
-from tiremodal_cli.modes import ModalOptions, modal_table_from_frf
-from tiremodal_cli.simulate import SimulationConfig, simulate
+from tiremodal_cli.diagnose.loop import DiagnoseOptions, diagnose
+from tiremodal_cli.tyre.effects import resolve_effects
+from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
+from tiremodal_cli.io.measurement import write_measurement
+from tiremodal_cli.io.modalfile import to_rows
+from tiremodal_cli.tyre.model import TyreParameters, branch_frequencies, point_mass_pairs, solve_modes
+from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 from conftest import run_cli
 
@@ -172,7 +172,7 @@ def test_run_writes_every_stage_and_a_manifest(tmp_path):
         assert (tmp_path / "out" / name).is_file()
     assert meas.read_bytes() == before  # input never modified
     assert not list((tmp_path / "out").glob("*.part"))
-    from tiremodal_cli.pipeline import is_complete
+    from tiremodal_cli.workflow.pipeline import is_complete
 
     assert is_complete(tmp_path / "out", meas)
     res = run_cli(["run", meas, "-o", tmp_path / "out"])

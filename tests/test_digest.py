@@ -107,7 +107,7 @@ def digest(outdir) -> dict:
 
 
 def _sample_run(outdir):
-    from tiremodal_cli.pipeline import run
+    from tiremodal_cli.workflow.pipeline import run
 
     run(SAMPLE, outdir)
     return digest(outdir)

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from tiremodal_cli.errors import DataFormatError
-from tiremodal_cli.export import RING_BASE, nodes_csv, shape_set, shapes_csv, write_uff
-from tiremodal_cli.frf import FRFOptions, compute_frf
-from tiremodal_cli.modes import ModalOptions, modal_table_from_frf
+from tiremodal_cli.io.export import RING_BASE, nodes_csv, shape_set, shapes_csv, write_uff
+from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
+from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
 
 
 @pytest.fixture(scope="module")
@@ -125,7 +125,7 @@ def test_mode_gif_moves_and_stays_small(table):
 def test_export_command(table, tmp_path):
     from conftest import run_cli
 
-    from tiremodal_cli.modalfile import write_modal
+    from tiremodal_cli.io.modalfile import write_modal
 
     modal = tmp_path / "modal.h5"
     write_modal(modal, table, input_file="x", input_sha256="0" * 64)

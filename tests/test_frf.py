@@ -9,11 +9,11 @@ import pyuff
 import scipy.optimize
 from numpy.testing import assert_allclose
 
-from tiremodal_cli.frf import FRFOptions, compute_frf, estimate
-from tiremodal_cli.frffile import read_frf
-from tiremodal_cli.measurement import Measurement, write_measurement
-from tiremodal_cli.simulate import Faults, SimulationConfig, half_sine_spectrum, simulate
-from tiremodal_cli.windows import correct_damping, exponential_window
+from tiremodal_cli.frf.estimate import FRFOptions, compute_frf, estimate
+from tiremodal_cli.io.frffile import read_frf
+from tiremodal_cli.io.measurement import Measurement, write_measurement
+from tiremodal_cli.tyre.simulate import Faults, SimulationConfig, half_sine_spectrum, simulate
+from tiremodal_cli.frf.windows import correct_damping, exponential_window
 
 from conftest import run_cli
 
@@ -69,7 +69,7 @@ def test_every_fault_rejected_and_no_clean_hit():
 
 
 def s_params():
-    from tiremodal_cli.model import TyreParameters
+    from tiremodal_cli.tyre.model import TyreParameters
 
     return TyreParameters(m_w=1000.0)
 
@@ -232,8 +232,8 @@ def test_uff_export_names_a_dead_channel(tmp_path, exact_sim, caplog):
     import dataclasses
     import logging
 
-    from tiremodal_cli.frf import FRFOptions, compute_frf
-    from tiremodal_cli.frffile import write_frf_uff
+    from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
+    from tiremodal_cli.io.frffile import write_frf_uff
 
     r = compute_frf(exact_sim.measurement, FRFOptions(band_hz=(0.0, 300.0)))
     r = dataclasses.replace(r, dead_channels=("rim",))

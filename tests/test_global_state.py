@@ -8,14 +8,14 @@ import numpy as np
 
 def test_importing_plots_keeps_the_matplotlib_backend():
     """A notebook's backend survives ``import tiremodal_cli.plots`` (it used to be forced to Agg)."""
-    code = ("import matplotlib; matplotlib.use('svg'); import tiremodal_cli.plots, tiremodal_cli.report; "
+    code = ("import matplotlib; matplotlib.use('svg'); import tiremodal_cli.plots, tiremodal_cli.workflow.report; "
             "print(matplotlib.get_backend())")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == "svg"
 
 
 def test_numpy_error_state_is_restored_after_a_point_mass_solve():
-    from tiremodal_cli.model import TyreParameters, point_mass_pairs
+    from tiremodal_cli.tyre.model import TyreParameters, point_mass_pairs
 
     before = np.geterr()
     point_mass_pairs(TyreParameters(), 1.0, 6)

@@ -9,10 +9,10 @@ import logging
 import numpy as np
 import pytest
 
-from tiremodal_cli.frf import FRFOptions, compute_frf
-from tiremodal_cli.hits import bounce_in_pulse, clipped_samples, double_hit, is_clipped, pulse_extent
-from tiremodal_cli.model import TyreParameters
-from tiremodal_cli.simulate import SimulationConfig, simulate
+from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
+from tiremodal_cli.frf.hits import bounce_in_pulse, clipped_samples, double_hit, is_clipped, pulse_extent
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 CFG = SimulationConfig(params=TyreParameters(m_w=1000.0), n_points=12, n_hits=2, sample_rate=1024.0,
                        n_samples=1024, pulse_width_s=0.002, noise=0.005, seed=11)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tiremodal_cli.identify import FitOptions, MeasuredMode, fit, model_frequencies, modes_from_rows, predict_table
-from tiremodal_cli.model import PAPER_PARAMETERS, TyreParameters, closed_form_hz
-from tiremodal_cli.sensitivity import coefficients, single_variable
+from tiremodal_cli.tyre.fit import FitOptions, MeasuredMode, fit, model_frequencies, modes_from_rows, predict_table
+from tiremodal_cli.tyre.model import PAPER_PARAMETERS, TyreParameters, closed_form_hz
+from tiremodal_cli.tyre.sensitivity import coefficients, single_variable
 
 from conftest import run_cli
 
@@ -34,7 +34,7 @@ def test_paper_parameters_give_model_md_examples():
 def test_recovers_truth_and_predicts_higher_orders():
     """The modal table of a simulate truth file, n ≤ 6 of both branches in: k_r1, k_r2 within
     2 % (here: to rounding) and the unmeasured n = 7 … 10 within 0.5 %."""
-    from tiremodal_cli.simulate import SimulationConfig, simulate
+    from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
     truth = simulate(SimulationConfig(n_points=8, n_hits=1, n_samples=256, params=TRUE, seed=0)).truth
     rows = [{"frequency_hz": m["frequency_hz"], "n": m["n"], "branch": m["branch"]} for m in truth["modes"]
@@ -122,10 +122,10 @@ def test_identify_bad_input(tmp_path, csv_text, args, msg):
 
 def test_end_to_end_from_time_records():
     """simulate → frf → lsce → identify: k_r1, k_r2 within 2 %, unmeasured orders within 0.5 %."""
-    from tiremodal_cli.frf import compute_frf
-    from tiremodal_cli.modalfile import to_rows
-    from tiremodal_cli.modes import ModalOptions, modal_table_from_frf
-    from tiremodal_cli.simulate import SimulationConfig, simulate
+    from tiremodal_cli.frf.estimate import compute_frf
+    from tiremodal_cli.io.modalfile import to_rows
+    from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
+    from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
     p = TRUE.replace(m_w=None)
     s = simulate(SimulationConfig(n_points=34, n_hits=3, sample_rate=1024.0, n_samples=4096, noise=0.01, seed=5,
@@ -168,9 +168,9 @@ def test_cli_predict_and_sensitivity(tmp_path):
 
 
 def test_predict_compares_model_and_measured_frfs(tmp_path):
-    from tiremodal_cli.frf import compute_frf
-    from tiremodal_cli.frffile import write_frf
-    from tiremodal_cli.simulate import SimulationConfig, simulate
+    from tiremodal_cli.frf.estimate import compute_frf
+    from tiremodal_cli.io.frffile import write_frf
+    from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
     s = simulate(SimulationConfig(n_points=8, n_hits=1, sample_rate=512.0, n_samples=1024, seed=2,
                                   params=TyreParameters(m_w=1000.0)))

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from tiremodal_cli.ingest.csv import read_csv_folder
-from tiremodal_cli.ingest.uff import read_uff_time, write_uff_time
-from tiremodal_cli.measurement import read_measurement
-from tiremodal_cli.simulate import SimulationConfig, simulate
+from tiremodal_cli.io.ingest.csv import read_csv_folder
+from tiremodal_cli.io.ingest.uff import read_uff_time, write_uff_time
+from tiremodal_cli.io.measurement import read_measurement
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 from conftest import run_cli
 

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tiremodal_cli.frf import FRFOptions, compute_frf
-from tiremodal_cli.frffile import write_frf
-from tiremodal_cli.lsfd import lsfd, mpc, synthesize
-from tiremodal_cli.modalfile import read_modal
-from tiremodal_cli.modes import ModalOptions, estimate_modes, modal_table_from_frf
-from tiremodal_cli.model import TyreParameters
-from tiremodal_cli.simulate import SimulationConfig, simulate
+from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
+from tiremodal_cli.io.frffile import write_frf
+from tiremodal_cli.modal.lsfd import lsfd, mpc, synthesize
+from tiremodal_cli.io.modalfile import read_modal
+from tiremodal_cli.modal.modes import ModalOptions, estimate_modes, modal_table_from_frf
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 from conftest import run_cli
 
@@ -173,7 +173,7 @@ def test_lsce_bad_input(tmp_path, case, msg):
         args = ["--band", 20, 80, "--spatial", "off"]
     write_frf(p, r)
     if case == "layout":
-        from tiremodal_cli.measurement import write_measurement
+        from tiremodal_cli.io.measurement import write_measurement
 
         p = tmp_path / "m.h5"
         write_measurement(p, s.measurement)
@@ -187,7 +187,7 @@ def test_lsce_bad_input(tmp_path, case, msg):
 def test_nested_orders_equal_a_least_squares_rebuilt_per_order():
     """The sweep's leading-block normal equations give the same AR coefficients (hence
     poles) as a stacked least squares built for that order alone."""
-    from tiremodal_cli.lsce import normal_matrix, principal_responses, sweep
+    from tiremodal_cli.modal.lsce import normal_matrix, principal_responses, sweep
 
     rng = np.random.default_rng(8)
     fn, zeta = np.array([31.0, 47.5, 90.0]), np.array([0.01, 0.02, 0.03])
@@ -209,7 +209,7 @@ def test_nested_orders_equal_a_least_squares_rebuilt_per_order():
 def test_poly_reference_resolves_a_repeated_root():
     """Two modes at one frequency with different participation: one reference cannot tell
     them apart, two references (poly-reference LSCE) give both poles."""
-    from tiremodal_cli.lsce import principal_responses, sweep_poly
+    from tiremodal_cli.modal.lsce import principal_responses, sweep_poly
 
     f = np.arange(0, 200, 0.25)
     s = np.array([-2 + 2j * np.pi * 80.0, -2 + 2j * np.pi * 80.0, -3 + 2j * np.pi * 120.0])
@@ -235,7 +235,7 @@ def test_added_mass_split_pairs_resolved_by_poly_reference():
     n = 0, opposite n = 8 gets a spurious third member, and a copy of opposite n = 6's
     member seen in order group 1, whose share does not add in phase to the member's, is
     kept apart and read as n = 1 — see docs/lsce.md.)"""
-    from tiremodal_cli.simulate import Channel
+    from tiremodal_cli.tyre.simulate import Channel
 
     s = simulate(SimulationConfig(n_points=34, n_hits=5, sample_rate=1024.0, n_samples=8192, seed=3,
                                   params=TyreParameters(m_w=1000.0),
@@ -289,8 +289,8 @@ def test_modes_do_not_depend_on_how_points_are_stored():
 
 def test_coherence_threshold_is_the_noise_quantile():
     """Pure noise through H1 with n_d averages: the threshold is exceeded by 1 % of lines."""
-    from tiremodal_cli.frf import estimate
-    from tiremodal_cli.modes import coherence_threshold
+    from tiremodal_cli.frf.estimate import estimate
+    from tiremodal_cli.modal.modes import coherence_threshold
     rng = np.random.default_rng(0)
     for n_d in (2, 3, 5):
         F = rng.standard_normal((n_d, 20000)) + 1j * rng.standard_normal((n_d, 20000))
@@ -305,7 +305,7 @@ def test_default_band_follows_the_data_not_the_sample_rate(fs):
     """The default band holds the n = 1 and n = 2 modes at any sample rate (the old
     0.04 fs start lost them at 2,048 Hz and above), and stops where the coherence fails
     (the hammer's spectrum falls towards its first zero at 1.5 / pulse width)."""
-    from tiremodal_cli.modes import default_band
+    from tiremodal_cli.modal.modes import default_band
     s = simulate(SimulationConfig(n_points=34, n_hits=3, sample_rate=fs, n_samples=4096, noise=0.02, seed=1,
                                   params=TyreParameters(m_w=1000.0)))
     r = compute_frf(s.measurement, FRFOptions(band_hz=(0.0, 0.3125 * fs), exp_end=0.05))
@@ -339,7 +339,7 @@ def test_real_beam_same_modes_in_every_form(form):
     """The real beam's accelerance turned into mobility and receptance: the reference's six
     modes within 0.1 % and at most one more (the glitch near 900 Hz, a peak in the data) in
     every form; the synthesis is in the given form (its fit error is small)."""
-    from tiremodal_cli.lsfd import FORM_POWER
+    from tiremodal_cli.modal.lsfd import FORM_POWER
     H = np.array([np.genfromtxt(BEAM / f"meas_point_{i}.txt", dtype=complex) for i in (1, 2, 3)])[None]
     f = np.arange(1001.0)
     Hf = H[..., 1:] / (2j * np.pi * f[1:]) ** (2 - FORM_POWER[form])

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tiremodal_cli.frf import compute_frf
-from tiremodal_cli.frffile import write_frf
-from tiremodal_cli.mac import mac, mac_matrix, subspace_mac
-from tiremodal_cli.model import TyreParameters
-from tiremodal_cli.simulate import SimulationConfig, simulate
+from tiremodal_cli.frf.estimate import compute_frf
+from tiremodal_cli.io.frffile import write_frf
+from tiremodal_cli.modal.mac import mac, mac_matrix, subspace_mac
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 from conftest import run_cli
 
@@ -45,7 +45,7 @@ def modal(tmp_path_factory):
 def test_automac_is_diagonal(modal):
     """Different n are orthogonal on the ring, except orders the 16-point grid aliases
     onto each other (n and 16 − n look the same)."""
-    from tiremodal_cli.modalfile import read_modal
+    from tiremodal_cli.io.modalfile import read_modal
 
     d = json.loads(run_cli(["mac", modal / "m.h5", "--json"]).stdout)
     M = np.array(d["mac"])
@@ -59,7 +59,7 @@ def test_analytic_and_model_mac(modal, tmp_path):
     d = json.loads(run_cli(["mac", modal / "m.h5", "--analytic", 8, "--json"]).stdout)
     M = np.array(d["mac"])
     best = M.argmax(axis=1)
-    from tiremodal_cli.modalfile import read_modal
+    from tiremodal_cli.io.modalfile import read_modal
 
     t = read_modal(modal / "m.h5")
     assert np.all(best == t.n_spatial) and np.all(M.max(axis=1) > 0.95)

@@ -8,7 +8,7 @@ import pytest
 from numpy.testing import assert_array_equal
 
 from tiremodal_cli.errors import DataFormatError
-from tiremodal_cli.measurement import Measurement, read_measurement, write_measurement
+from tiremodal_cli.io.measurement import Measurement, read_measurement, write_measurement
 
 from conftest import run_cli
 

@@ -5,9 +5,9 @@ import pytest
 import scipy.linalg
 from numpy.testing import assert_allclose
 
-from tiremodal_cli.effects import EFFECTS
+from tiremodal_cli.tyre.effects import EFFECTS
 from tiremodal_cli.errors import ParameterError
-from tiremodal_cli.model import PAPER_PARAMETERS as P, closed_form_hz, frf, solve_modes
+from tiremodal_cli.tyre.model import PAPER_PARAMETERS as P, closed_form_hz, frf, solve_modes
 
 
 def table(m, branch):
@@ -104,8 +104,8 @@ def test_viscoelastic_is_self_consistent():
     beta = 0.1
     m = solve_modes(P, n_max=4, effects={"viscoelastic": {"beta": beta}})
     # each mode satisfies the eigenproblem with springs evaluated at its own frequency
-    from tiremodal_cli.effects import resolve_effects
-    from tiremodal_cli.model import block
+    from tiremodal_cli.tyre.effects import resolve_effects
+    from tiremodal_cli.tyre.model import block
 
     eff = resolve_effects({"viscoelastic": {"beta": beta}})
     for f, n in zip(m.freq_hz, m.n):

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from tiremodal_cli import names, plots
-from tiremodal_cli.effects import EFFECTS
-from tiremodal_cli.model import TyreParameters
+from tiremodal_cli.tyre.effects import EFFECTS
+from tiremodal_cli.tyre.model import TyreParameters
 
 
 def test_mac_prints_values_only_where_readable():

@@ -7,7 +7,7 @@ import logging
 
 import pytest
 
-from tiremodal_cli.measurement import write_measurement
+from tiremodal_cli.io.measurement import write_measurement
 
 from conftest import run_cli
 
@@ -56,6 +56,6 @@ def test_v_speaks_for_tiremodal_not_for_other_libraries(meas, tmp_path, monkeypa
     _run(meas, tmp_path / "b", "-v", tty=False, monkeypatch=monkeypatch)
     assert [r.getMessage() for r in stages()] == ["run: frf", "run: lsce", "run: identify", "run: diagnose"]
     assert run_cli(["-vv", "info", meas]).exit_code == 0
-    assert logging.getLogger("tiremodal_cli.frf").isEnabledFor(logging.DEBUG)
+    assert logging.getLogger("tiremodal_cli.frf.estimate").isEnabledFor(logging.DEBUG)
     assert not logging.getLogger("matplotlib.font_manager").isEnabledFor(logging.INFO)
     assert not logging.getLogger("h5py").isEnabledFor(logging.INFO)

@@ -27,3 +27,35 @@ def test_readme_lists_every_command():
     text = (ROOT / "README.md").read_text()
     for name in cli.commands:
         assert f"`tiremodal {name}" in text, name
+
+
+def _layout_block():
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    block = text.split("## Layout", 1)[1].split("```", 2)[1]
+    listed, pkg = {}, None
+    for line in block.splitlines():
+        words = line.split()
+        if not words or not line.startswith("  "):
+            continue
+        if words[0].endswith("/") and not words[0].startswith("("):
+            pkg = words[0].rstrip("/")
+            words = words[1:]
+        elif line.startswith("  ") and not line.startswith("      ") and words[0].endswith(".py"):
+            pkg = ""
+        listed.setdefault(pkg, set()).update(w for w in words if w.endswith(".py"))
+    return listed
+
+
+def test_readme_layout_matches_the_tree():
+    """Every module of the package is named in the README's layout, and nothing else."""
+    root = ROOT / "tiremodal_cli"
+    tree = {}
+    for p in root.rglob("*.py"):
+        if "__pycache__" in p.parts:
+            continue
+        rel = p.relative_to(root)
+        pkg = "/".join(rel.parts[:-1])
+        if rel.name == "__init__.py" and pkg:
+            continue
+        tree.setdefault(pkg, set()).add(rel.name)
+    assert _layout_block() == tree

@@ -14,11 +14,11 @@ import matplotlib.image as mpimg
 import numpy as np
 import pytest
 
-from tiremodal_cli.batch import load_config, run_batch
+from tiremodal_cli.workflow.batch import load_config, run_batch
 from tiremodal_cli.errors import DataFormatError
-from tiremodal_cli.pipeline import run
-from tiremodal_cli.report import FIGURES, report
-from tiremodal_cli.simulate import simulate_campaign
+from tiremodal_cli.workflow.pipeline import run
+from tiremodal_cli.workflow.report import FIGURES, report
+from tiremodal_cli.tyre.simulate import simulate_campaign
 
 from conftest import run_cli
 

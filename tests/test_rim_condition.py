@@ -5,10 +5,10 @@ from types import SimpleNamespace
 
 import pytest
 
-from tiremodal_cli.frf import FRFOptions, compute_frf
-from tiremodal_cli.model import TyreParameters
-from tiremodal_cli.pipeline import NOMINAL_RIM_KG, rim_condition
-from tiremodal_cli.simulate import SimulationConfig, simulate
+from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.workflow.pipeline import NOMINAL_RIM_KG, rim_condition
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 
 def _r(dead=(), locations=("tread", "sidewall", "rim")):

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from tiremodal_cli.errors import ParameterError
-from tiremodal_cli.model import TyreParameters, closed_form_hz
-from tiremodal_cli.ring import RING_VARIANTS, RingParameters, classical_ring_hz, ring_modes
+from tiremodal_cli.tyre.model import TyreParameters, closed_form_hz
+from tiremodal_cli.tyre.ring import RING_VARIANTS, RingParameters, classical_ring_hz, ring_modes
 
 FREE = dict(m_s=0.0, k_r1=0.0, k_r2=0.0, tangential=True, EA=1e9)
 
@@ -107,7 +107,7 @@ def test_point_mass_on_a_node_leaves_one_member_of_each_pair():
     base = ring_modes(RingParameters(), f_max_hz=200)
     mass = 0.3
     loaded = ring_modes(RingParameters(masses=((0.0, mass),)), f_max_hz=200)
-    from tiremodal_cli.ring import ring_observation
+    from tiremodal_cli.tyre.ring import ring_observation
 
     for n in (2, 3, 4):
         sel_b = np.flatnonzero((base.n == n) & (np.array(base.branch) == "same"))

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import pytest
 
-from tiremodal_cli.measurement import write_measurement
-from tiremodal_cli.pipeline import MANIFEST, OUTPUTS, RunOptions, run_folder, verify_manifest
-from tiremodal_cli.simulate import SimulationConfig, simulate
+from tiremodal_cli.io.measurement import write_measurement
+from tiremodal_cli.workflow.pipeline import MANIFEST, OUTPUTS, RunOptions, run_folder, verify_manifest
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 from conftest import run_cli
 
@@ -156,7 +156,7 @@ def test_report_refuses_a_mixed_folder(measured, tmp_path):
 def test_report_of_a_run_with_a_dead_channel(measured):
     """Every default simulated test has a dead rim channel: its rejection has no point/hit;
     the report's rejection table shows it as 'all' (it raised TypeError before)."""
-    from tiremodal_cli.report import FIGURES, _load_json, _run_body
+    from tiremodal_cli.workflow.report import FIGURES, _load_json, _run_body
 
     meas, old = measured
     man = json.loads((old / MANIFEST).read_text())
@@ -173,7 +173,7 @@ def test_modal_file_stores_no_nan_for_a_dead_channel(measured):
     import h5py
     import numpy as np
 
-    from tiremodal_cli.modalfile import read_modal
+    from tiremodal_cli.io.modalfile import read_modal
 
     _, old = measured
     with h5py.File(old / "modal.h5", "r") as h:

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tiremodal_cli.frf import FRFOptions, compute_frf
-from tiremodal_cli.model import TyreParameters, closed_form_hz
-from tiremodal_cli.simulate import Faults, SimulationConfig, half_sine_spectrum, simulate
+from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
+from tiremodal_cli.tyre.model import TyreParameters, closed_form_hz
+from tiremodal_cli.tyre.simulate import Faults, SimulationConfig, half_sine_spectrum, simulate
 
 from conftest import run_cli
 

@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tiremodal_cli.diagnose import diagnose
-from tiremodal_cli.effects import resolve_effects
-from tiremodal_cli.identify import FitOptions, fit, modes_from_rows
-from tiremodal_cli.model import (ParamStack, TyreParameters, branch_frequencies, point_mass_pairs, solve_modes,
+from tiremodal_cli.diagnose.loop import diagnose
+from tiremodal_cli.tyre.effects import resolve_effects
+from tiremodal_cli.tyre.fit import FitOptions, fit, modes_from_rows
+from tiremodal_cli.tyre.model import (ParamStack, TyreParameters, branch_frequencies, point_mass_pairs, solve_modes,
                                  stacked_branch_frequencies, stacked_point_mass_pairs)
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from tiremodal_cli.errors import DataFormatError
-from tiremodal_cli.frffile import read_frf, read_frf_uff
+from tiremodal_cli.io.frffile import read_frf, read_frf_uff
 
 from conftest import run_cli
 
@@ -153,7 +153,7 @@ def test_report_says_the_pipeline_started_at_lsce(uff_runs):
 
 
 def test_run_without_geometry_or_mapping_is_one_line_exit_2(tmp_path, exact_sim):
-    from tiremodal_cli.frf import FRFOptions, compute_frf
+    from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
 
     r = compute_frf(exact_sim.measurement, FRFOptions(band_hz=(0.0, 300.0)))
     path = write_testlab_uff(tmp_path / "nogeo.uff", r, geometry=False)
@@ -166,8 +166,8 @@ def test_run_without_geometry_or_mapping_is_one_line_exit_2(tmp_path, exact_sim)
 
 def test_mapping_places_the_points_when_the_file_does_not(tmp_path, exact_sim):
     """The same file with a mapping's [points] and [channels]: read with those angles."""
-    from tiremodal_cli.frf import FRFOptions, compute_frf
-    from tiremodal_cli.ingest import load_channel_map
+    from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
+    from tiremodal_cli.io.ingest import load_channel_map
 
     r = compute_frf(exact_sim.measurement, FRFOptions(band_hz=(0.0, 300.0)))
     path = write_testlab_uff(tmp_path / "nogeo.uff", r, geometry=False)
@@ -253,7 +253,7 @@ def _band(uff_runs):
 def test_geometry_in_another_plane_and_off_any_plane(tmp_path, exact_sim):
     """A wheel whose axis is y (the tyre in the ZX plane): the same angles, about that axis.
     Points that lie in no coordinate plane: one line saying so, and what is allowed."""
-    from tiremodal_cli.frf import FRFOptions, compute_frf
+    from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
 
     r = compute_frf(exact_sim.measurement, FRFOptions(band_hz=(0.0, 300.0)))
     got = read_frf_uff(write_testlab_uff(tmp_path / "zx.uff", r, plane="zx"))
@@ -267,7 +267,7 @@ def test_points_on_a_rounded_uniform_grid_are_put_on_it_and_hand_marked_ones_are
     """Six significant digits (dataset 15) of a uniform 34-point grid from 10°: the angles come
     back exactly uniform; a grid marked by hand (1 mm errors on a 0.65 m radius) stays as
     measured."""
-    from tiremodal_cli.frffile import _uniform_grid
+    from tiremodal_cli.io.frffile import _uniform_grid
 
     N, R = 34, 0.65
     th = np.deg2rad(10) + 2 * np.pi * np.arange(N) / N

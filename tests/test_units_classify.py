@@ -1,4 +1,4 @@
-"""Direct tests of the tyre classification of modes (:mod:`tiremodal_cli.classify`).
+"""Direct tests of the tyre classification of modes (:mod:`tiremodal_cli.modal.classify`).
 
 Truths used: a tread shape cos n(θ − φ) has circumferential order n (any phase, any complex
 scaling); a sidewall moving with the tread (positive real ratio) is the in-phase branch,
@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tiremodal_cli.classify import classify, order_energy
+from tiremodal_cli.modal.classify import classify, order_energy
 
 LOCS = ("tread", "sidewall")
 

@@ -1,4 +1,4 @@
-"""Direct tests of the circumferential decomposition (:mod:`tiremodal_cli.spatial`).
+"""Direct tests of the circumferential decomposition (:mod:`tiremodal_cli.modal.spatial`).
 
 The truths are those of discrete Fourier analysis, not of the code: harmonics of different
 order are orthogonal on an equally spaced grid; a shape cos(nθ + φ) = cos φ cos nθ − sin φ
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from tiremodal_cli.errors import DataFormatError
-from tiremodal_cli.spatial import decompose, harmonic_design, max_order
+from tiremodal_cli.modal.spatial import decompose, harmonic_design, max_order
 
 
 def _uniform(n_p, offset=0.0):

@@ -1,4 +1,4 @@
-"""Direct tests of the stabilization diagram (:mod:`tiremodal_cli.stabilization`).
+"""Direct tests of the stabilization diagram (:mod:`tiremodal_cli.modal.stabilization`).
 
 Truths used: the poles of a 2-DOF mass–spring–damper are the eigenvalues of its state
 matrix (computed here by scipy, not by the code under test); a physical pole stays put as
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from tiremodal_cli.lsce import Band, OrderPoles, poles_to_modal, principal_responses, sweep
-from tiremodal_cli.stabilization import StabilizationOptions, stabilize
+from tiremodal_cli.modal.lsce import Band, OrderPoles, poles_to_modal, principal_responses, sweep
+from tiremodal_cli.modal.stabilization import StabilizationOptions, stabilize
 
 F_LO, WIDTH = 0.0, 100.0
 

@@ -1,4 +1,4 @@
-"""Direct tests of the impact-testing windows (:mod:`tiremodal_cli.windows`).
+"""Direct tests of the impact-testing windows (:mod:`tiremodal_cli.frf.windows`).
 
 Truths used (not taken from the code): exp(−t/τ)·e^{λt} = e^{(λ − 1/τ)t}, so an exponential
 window moves a pole left by exactly σ_w = 1/τ; a geometric sequence w[k] = r^k satisfies
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from tiremodal_cli.errors import ParameterError
-from tiremodal_cli.windows import correct_damping, correct_poles, exponential_window, force_window
+from tiremodal_cli.frf.windows import correct_damping, correct_poles, exponential_window, force_window
 
 FS = 2048.0
 

@@ -11,8 +11,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from tiremodal_cli.simulate import SimulationConfig, simulate
-from tiremodal_cli.validation import (FACTORS, PHYSICS, Case, config_for, expected_groups, matrix,
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
+from tiremodal_cli.workflow.validation import (FACTORS, PHYSICS, Case, config_for, expected_groups, matrix,
                                       run_case, score_modes)
 
 

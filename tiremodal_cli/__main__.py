@@ -1,6 +1,6 @@
 """``python -m tiremodal_cli``: the ``tiremodal`` command."""
 
-from .cli.main import cli
+from tiremodal_cli.cli.main import cli
 
 if __name__ == "__main__":
     cli()

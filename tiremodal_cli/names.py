@@ -3,7 +3,7 @@
 Reports, campaign plots and tables take a parameter's words and unit from here, never
 from the code name alone. The tyre model's parameters are listed in :data:`PARAMETERS`
 (``TyreParameters.UNITS`` is drawn from it); an effect's title and its parameters' units
-and meanings come from the effect's own declaration (:mod:`tiremodal_cli.effects`), read
+and meanings come from the effect's own declaration (:mod:`tiremodal_cli.tyre.effects`), read
 here so that every caller has one place to ask.
 """
 
@@ -36,7 +36,7 @@ QUANTITIES: dict[str, tuple[str, str]] = {
 
 
 def _effect_param(key: str):
-    from .effects import EFFECTS
+    from tiremodal_cli.tyre.effects import EFFECTS
 
     eff, _, p = key.partition(".")
     if eff in EFFECTS:
@@ -86,7 +86,7 @@ def long_label(key: str) -> str:
 def effect_title(effect: str) -> str:
     """An effect's title in words (``sidewall_membrane`` → "sidewall circumferential (membrane)
     stiffness ∝ n²"); a parameter found off (``"EI"``) → its name; else the code name."""
-    from .effects import EFFECTS
+    from tiremodal_cli.tyre.effects import EFFECTS
 
     if effect in EFFECTS:
         return EFFECTS[effect].title

@@ -14,8 +14,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import FuncFormatter, MaxNLocator
 
-from . import names as _names
-from .files import atomic_path
+from tiremodal_cli import names as _names
+from tiremodal_cli.io.files import atomic_path
 
 __all__ = ["plot_frf", "save_figure", "plot_stabilization", "plot_mac", "plot_shapes", "plot_synthesis",
            "plot_dispersion", "plot_convergence", "plot_sensitivity", "plot_residuals", "plot_campaign_parameters",
@@ -461,7 +461,7 @@ def stabilization_figure(table, r):
 
 def automac_figure(table):
     """AutoMAC of the modes' shapes (all channels and points stacked). Returns the figure."""
-    from .mac import mac_matrix
+    from tiremodal_cli.modal.mac import mac_matrix
 
     flat = np.nan_to_num(table.shapes.reshape(table.n_modes, -1))
     labels = mode_labels(table)
@@ -534,7 +534,7 @@ def _mode_figure(shapes, k, frames, exaggeration, size_in):
 
 def animate_mode(shapes, k: int, *, frames: int = 16, exaggeration: float = 0.2, size_in: float = 2.4):
     """One mode shape moving, for interactive use: the rings of an
-    :class:`tiremodal_cli.export.ShapeSet` in the tyre's plane, each node displaced
+    :class:`tiremodal_cli.io.export.ShapeSet` in the tyre's plane, each node displaced
     radially by Re(φ e^{iωt}) over one period (the largest displacement ``exaggeration`` ×
     the tread radius). Returns a ``matplotlib.animation.FuncAnimation``; for a file or a
     report use :func:`mode_gif`."""
@@ -551,7 +551,7 @@ def iter_mode_gifs(shapes, modes=None, *, frames: int = 12, exaggeration: float 
 
     Parameters
     ----------
-    shapes : tiremodal_cli.export.ShapeSet
+    shapes : tiremodal_cli.io.export.ShapeSet
     modes : sequence of int, optional — which modes (default: all)
     frames : frames over one period ; exaggeration : largest displacement / tread radius
     size_in, dpi : figure size (inches) and resolution ; fps : frames per second

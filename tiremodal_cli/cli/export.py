@@ -6,12 +6,12 @@ from pathlib import Path
 
 import click
 
-from ..errors import DataFormatError
-from ..files import refuse_input_as_output
-from ..export import DEFAULT_RADII_M, FORMATS, export_folder
-from ..modalfile import read_modal
-from .main import cli
-from .options import Progress, echo_json, json_option, overwrite_option, parse_key_values
+from tiremodal_cli.errors import DataFormatError
+from tiremodal_cli.io.files import refuse_input_as_output
+from tiremodal_cli.io.export import DEFAULT_RADII_M, FORMATS, export_folder
+from tiremodal_cli.io.modalfile import read_modal
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.cli.options import Progress, echo_json, json_option, overwrite_option, parse_key_values
 
 
 def _modal_path(source: Path) -> Path:

@@ -7,13 +7,13 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..errors import DataFormatError
-from ..files import check_overwrite, refuse_input_as_output, sha256_file
-from ..frf import ESTIMATORS, FORMS, FRFOptions, compute_frf
-from ..frffile import describe_frf, write_frf, write_frf_uff
-from ..measurement import open_measurement
-from .main import cli
-from .options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option
+from tiremodal_cli.errors import DataFormatError
+from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, sha256_file
+from tiremodal_cli.frf.estimate import ESTIMATORS, FORMS, FRFOptions, compute_frf
+from tiremodal_cli.io.frffile import describe_frf, write_frf, write_frf_uff
+from tiremodal_cli.io.measurement import open_measurement
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.cli.options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option
 
 
 def _check_windows(m, force_window_s, exp_tau_s, exp_end=None) -> None:
@@ -100,7 +100,7 @@ def frf_cmd(measurement, output, estimator, form, band, force_window, force_wind
     if uff_out:
         write_frf_uff(uff_out, r, overwrite=overwrite)
     if plot_out:
-        from ..plots import plot_frf, save_figure
+        from tiremodal_cli.plots import plot_frf, save_figure
 
         axes = plot_frf(r, points=pts)
         save_figure(axes[0].figure, plot_out, overwrite=overwrite)

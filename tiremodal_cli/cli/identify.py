@@ -7,16 +7,16 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..files import check_overwrite, refuse_input_as_output, write_text_atomic
-from ..identify import PAPER_GA, FitOptions, fit, fit_report, modes_from_rows, predict_table
-from ..robust import robust_fit, with_sigma
+from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
+from tiremodal_cli.tyre.fit import PAPER_GA, FitOptions, fit, fit_report, modes_from_rows, predict_table
+from tiremodal_cli.tyre.robust import robust_fit, with_sigma
 
 #: Floor of a measured frequency's relative uncertainty for the screen, % (diagnose's:
 #: the repeatability of an impact test's frequencies)
 NOISE_FLOOR_PCT = 0.1
-from .main import cli
-from ..errors import DataFormatError
-from .options import (FiniteRange, PlotPath, Progress, echo_json, json_option, load_params, no_usable_modes,
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.errors import DataFormatError
+from tiremodal_cli.cli.options import (FiniteRange, PlotPath, Progress, echo_json, json_option, load_params, no_usable_modes,
                       overwrite_option, params_options, read_table_rows, rows_to_csv)
 
 
@@ -109,7 +109,7 @@ def identify_cmd(modes_file, params_file, param_items, free, bounds, weights, se
     try:
         if keep_all:
             res, aside = fit(modes, base, opt, progress=bar), None
-        else:  # modes the model cannot represent set aside before they move it (tiremodal_cli.robust)
+        else:  # modes the model cannot represent set aside before they move it (tiremodal_cli.tyre.robust)
             rf = robust_fit(with_sigma(modes, NOISE_FLOOR_PCT), base, opt, alpha=alpha)
             res, aside = rf.fit, rf
     finally:
@@ -122,7 +122,7 @@ def identify_cmd(modes_file, params_file, param_items, free, bounds, weights, se
     if csv_out:
         write_text_atomic(csv_out, rows_to_csv(res.modes), overwrite=overwrite)
     if plot_fit or plot_convergence:
-        from ..plots import plot_convergence as pc, plot_dispersion, save_figure
+        from tiremodal_cli.plots import plot_convergence as pc, plot_dispersion, save_figure
 
         if plot_fit:
             save_figure(plot_dispersion(preds, measured=res.modes).figure, plot_fit, overwrite=overwrite)

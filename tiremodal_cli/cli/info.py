@@ -6,10 +6,10 @@ from pathlib import Path
 
 import click
 
-from .. import frffile, measurement, modalfile
-from ..errors import DataFormatError
-from .main import cli
-from .options import echo_json, json_option
+from tiremodal_cli.io import frffile, measurement, modalfile
+from tiremodal_cli.errors import DataFormatError
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.cli.options import echo_json, json_option
 
 DESCRIBERS = {measurement.FORMAT_NAME: lambda p: measurement.describe(
     measurement.read_measurement(p)),

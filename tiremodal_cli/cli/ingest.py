@@ -6,12 +6,12 @@ from pathlib import Path
 
 import click
 
-from ..errors import ParameterError
-from ..files import refuse_input_as_output
-from ..ingest import read_source, source_kind
-from ..measurement import describe, write_measurement
-from .main import cli
-from .options import FiniteRange, echo_json, json_option, overwrite_option
+from tiremodal_cli.errors import ParameterError
+from tiremodal_cli.io.files import refuse_input_as_output
+from tiremodal_cli.io.ingest import read_source, source_kind
+from tiremodal_cli.io.measurement import describe, write_measurement
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.cli.options import FiniteRange, echo_json, json_option, overwrite_option
 
 
 def _read_by_ingest(path: Path) -> bool:

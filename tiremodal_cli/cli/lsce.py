@@ -7,14 +7,14 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..files import check_overwrite, refuse_input_as_output, sha256_file, write_text_atomic
-from ..frffile import read_frf, read_frf_uff
-from ..ingest import load_channel_map
-from ..modalfile import to_csv, to_rows, write_modal
-from ..modes import ModalOptions, modal_table_from_frf
-from ..stabilization import StabilizationOptions
-from .main import cli
-from .options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option
+from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, sha256_file, write_text_atomic
+from tiremodal_cli.io.frffile import read_frf, read_frf_uff
+from tiremodal_cli.io.ingest import load_channel_map
+from tiremodal_cli.io.modalfile import to_csv, to_rows, write_modal
+from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
+from tiremodal_cli.modal.stabilization import StabilizationOptions
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.cli.options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option
 
 
 def read_any_frf(path: Path, mapping=None):
@@ -102,7 +102,7 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, method, tol_freq, tol_d
 
 
 def _plots(table, r, stab, macp, shapes, synth, overwrite):
-    from ..plots import automac_figure, plot_shapes, save_figure, stabilization_figure, synthesis_figure
+    from tiremodal_cli.plots import automac_figure, plot_shapes, save_figure, stabilization_figure, synthesis_figure
 
     for path, make in ((stab, lambda: stabilization_figure(table, r)), (macp, lambda: automac_figure(table)),
                        (shapes, lambda: plot_shapes(table)), (synth, lambda: synthesis_figure(table, r))):

@@ -10,14 +10,14 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..config import load_mapping
-from ..errors import DataFormatError
-from ..files import check_overwrite, refuse_input_as_output, write_text_atomic
-from ..mac import mac_matrix, subspace_mac
-from ..modalfile import read_modal
-from ..model import TyreParameters, observation, solve_modes
-from .main import cli
-from .options import PlotPath, echo_json, json_option, overwrite_option
+from tiremodal_cli.io.config import load_mapping
+from tiremodal_cli.errors import DataFormatError
+from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
+from tiremodal_cli.modal.mac import mac_matrix, subspace_mac
+from tiremodal_cli.io.modalfile import read_modal
+from tiremodal_cli.tyre.model import TyreParameters, observation, solve_modes
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.cli.options import PlotPath, echo_json, json_option, overwrite_option
 
 
 def _labels(t):
@@ -110,7 +110,7 @@ def mac_cmd(modal_file, other, analytic, model_file, channels, csv_out, plot_out
             w.writerow([lab] + [f"{v:.4f}" for v in row])
         write_text_atomic(csv_out, buf.getvalue(), overwrite=overwrite)
     if plot_out:
-        from ..plots import plot_mac, save_figure
+        from tiremodal_cli.plots import plot_mac, save_figure
 
         ax = plot_mac(M, labels_a=la, labels_b=lb, title={"auto": "AutoMAC", "cross": "cross-MAC",
                                                            "analytic": "MAC with cos nθ", "model": "MAC with the model"}[kind])

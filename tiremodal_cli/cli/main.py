@@ -12,8 +12,8 @@ import sys
 
 import click
 
-from .. import __version__
-from ..errors import TiremodalError
+from tiremodal_cli import __version__
+from tiremodal_cli.errors import TiremodalError
 
 _NO_ARGS = getattr(click.exceptions, "NoArgsIsHelpError", None)  # click ≥ 8.2
 COMMANDS = ("run", "batch", "report", "simulate", "ingest", "info", "frf", "lsce", "mac", "predict", "identify", "diagnose",

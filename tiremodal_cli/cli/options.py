@@ -9,8 +9,8 @@ from pathlib import Path
 
 import click
 
-from ..files import dumps  # noqa: F401  (re-exported for the commands)
-from ..modalfile import no_usable_modes  # noqa: F401  (re-exported for the commands)
+from tiremodal_cli.io.files import dumps  # noqa: F401  (re-exported for the commands)
+from tiremodal_cli.io.modalfile import no_usable_modes  # noqa: F401  (re-exported for the commands)
 
 overwrite_option = click.option("--overwrite", is_flag=True,
                                 help="Replace existing outputs (refused otherwise).")
@@ -111,8 +111,8 @@ def params_options(f):
 
 def load_params(params_file, param_items):
     """TyreParameters from a file (its [params] table, or the top level) and NAME=VALUE items."""
-    from ..config import load_mapping
-    from ..model import TyreParameters
+    from tiremodal_cli.io.config import load_mapping
+    from tiremodal_cli.tyre.model import TyreParameters
 
     base = {}
     effects = {}
@@ -126,15 +126,15 @@ def load_params(params_file, param_items):
 
 def read_table_rows(path: Path):
     """Modal-table rows from a modal file (``lsce``) or a CSV with frequency_hz, n, branch."""
-    from ..measurement import file_format
-    from ..modalfile import FORMAT_NAME, read_modal, read_modal_csv, to_rows
+    from tiremodal_cli.io.measurement import file_format
+    from tiremodal_cli.io.modalfile import FORMAT_NAME, read_modal, read_modal_csv, to_rows
 
     path = Path(path)
     if path.suffix.lower() == ".csv":
         return read_modal_csv(path)
     fmt = file_format(path)
     if fmt != FORMAT_NAME:
-        from ..errors import DataFormatError
+        from tiremodal_cli.errors import DataFormatError
 
         raise DataFormatError(f"{path}: format {fmt!r} is not a modal file or CSV; run 'tiremodal lsce' first")
     return to_rows(read_modal(path))

@@ -7,10 +7,10 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..files import check_overwrite, refuse_input_as_output, write_text_atomic
-from ..model import paper_damping, solve_modes
-from .main import cli
-from .options import FiniteRange, PlotPath, echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
+from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
+from tiremodal_cli.tyre.model import paper_damping, solve_modes
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.cli.options import FiniteRange, PlotPath, echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
 
 
 @cli.command("predict", epilog="\b\nExample:\n  tiremodal predict --n-max 12 --csv predicted.csv")
@@ -45,7 +45,7 @@ def predict_cmd(params_file, param_items, n_max, csv_out, plot_out, compare_frf,
     if csv_out:
         write_text_atomic(csv_out, rows_to_csv(rows), overwrite=overwrite)
     if plot_out:
-        from ..plots import plot_dispersion, save_figure
+        from tiremodal_cli.plots import plot_dispersion, save_figure
 
         ax = plot_dispersion([{"n": r["n"], "branch": r["branch"], "model_hz": r["frequency_hz"]} for r in rows])
         save_figure(ax.figure, plot_out, overwrite=overwrite)
@@ -59,10 +59,10 @@ def predict_cmd(params_file, param_items, n_max, csv_out, plot_out, compare_frf,
 
 def _compare(p, effects, frf_path, out, point, damping, overwrite):
     """Model FRFs at the test's geometry over the measured ones, for every live channel."""
-    from ..errors import DataFormatError
-    from ..frffile import read_frf
-    from ..model import frf as model_frf
-    from ..plots import plot_synthesis, save_figure
+    from tiremodal_cli.errors import DataFormatError
+    from tiremodal_cli.io.frffile import read_frf
+    from tiremodal_cli.tyre.model import frf as model_frf
+    from tiremodal_cli.plots import plot_synthesis, save_figure
 
     r = read_frf(frf_path)
     if not 1 <= point <= r.point_angle.size:

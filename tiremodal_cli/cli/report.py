@@ -6,9 +6,9 @@ from pathlib import Path
 
 import click
 
-from ..report import report
-from .main import cli
-from .options import Progress, echo_json, json_option
+from tiremodal_cli.workflow.report import report
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.cli.options import Progress, echo_json, json_option
 
 
 @cli.command("report", epilog="\b\nExample:\n  tiremodal report out/gl073a")

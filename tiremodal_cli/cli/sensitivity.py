@@ -8,10 +8,10 @@ import math
 
 import click
 
-from ..files import check_overwrite, refuse_input_as_output, write_text_atomic
-from ..sensitivity import PAPER_STUDY, coefficients, single_variable
-from .main import cli
-from .options import PlotPath, echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
+from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
+from tiremodal_cli.tyre.sensitivity import PAPER_STUDY, coefficients, single_variable
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.cli.options import PlotPath, echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
 
 
 @cli.command("sensitivity", epilog="\b\nExample:\n  tiremodal sensitivity --n-max 10")
@@ -44,7 +44,7 @@ def sensitivity_cmd(params_file, param_items, parameters, factors, n_max, csv_ou
     if csv_out:
         write_text_atomic(csv_out, rows_to_csv(study), overwrite=overwrite)
     if plot_out:
-        from ..plots import plot_sensitivity, save_figure
+        from tiremodal_cli.plots import plot_sensitivity, save_figure
 
         ax = plot_sensitivity(ns, br, S, names)
         save_figure(ax[0].figure, plot_out, overwrite=overwrite)

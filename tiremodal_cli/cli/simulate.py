@@ -8,17 +8,17 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..config import load_mapping
-from ..effects import EFFECTS
-from ..errors import ParameterError
-from ..files import atomic_path, check_overwrite, check_size, refuse_input_as_output, write_text_atomic
-from ..ingest.uff import write_uff_time
-from ..measurement import write_measurement
-from ..model import TyreParameters
-from ..ring import RING_VARIANTS, RingParameters
-from ..simulate import MODELS, Channel, Faults, SimulationConfig, simulate
-from .main import cli
-from .options import FiniteRange, Progress, dumps, echo_json, json_option, overwrite_option, parse_key_values
+from tiremodal_cli.io.config import load_mapping
+from tiremodal_cli.tyre.effects import EFFECTS
+from tiremodal_cli.errors import ParameterError
+from tiremodal_cli.io.files import atomic_path, check_overwrite, check_size, refuse_input_as_output, write_text_atomic
+from tiremodal_cli.io.ingest.uff import write_uff_time
+from tiremodal_cli.io.measurement import write_measurement
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.ring import RING_VARIANTS, RingParameters
+from tiremodal_cli.tyre.simulate import MODELS, Channel, Faults, SimulationConfig, simulate
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.cli.options import FiniteRange, Progress, dumps, echo_json, json_option, overwrite_option, parse_key_values
 
 _TABLES = {"params", "effects", "faults", "channels", "ring"}
 _SCALARS = {f.name for f in dataclasses.fields(SimulationConfig)} - _TABLES - {"model"} | {"model", "variant"}
@@ -94,7 +94,7 @@ def estimate_bytes(cfg: SimulationConfig) -> float:
     if getattr(cfg, "model", "paper") == "ring":
         # the ring's mesh (refined for every order below 1.25 × Nyquist), ≤ 5 fields on 2 nodes
         # per element; its condensed dense matrices and eigensolver workspace: 3 of n_dof²
-        from ..ring import elements_for
+        from tiremodal_cli.tyre.ring import elements_for
 
         ne = max(cfg.ring.n_elements, elements_for(cfg.ring, 0.625 * cfg.sample_rate))
         n_dof = 10.0 * ne
@@ -113,7 +113,7 @@ def build_config(config_file, overrides: dict, params: dict, effects: dict, faul
 
     ``--param`` values go to the chosen model's parameters: ``[params]`` for the paper's
     model, ``[ring]`` for the finite-element ring (whose ``variant`` presets one physical
-    effect, :data:`tiremodal_cli.ring.RING_VARIANTS`, under the explicit values).
+    effect, :data:`tiremodal_cli.tyre.ring.RING_VARIANTS`, under the explicit values).
     """
     data = load_mapping(config_file) if config_file else {}
     unknown = sorted(set(data) - _SCALARS - _TABLES)

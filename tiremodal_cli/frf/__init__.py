@@ -1,0 +1,1 @@
+"""The FRF stage: hit checks, force/exponential windows, H1 and coherence (-> FRFResult)."""

@@ -1,0 +1,254 @@
+"""Tyre classification of modes: circumferential order n, branch, aliases, split pairs.
+
+* **n** from the spatial pattern of the tread shape over the impact angles: the shape (the
+  residues seen by a tread sensor) is made real along its principal direction and fitted
+  with the harmonics of :func:`tiremodal_cli.modal.spatial.harmonic_design`; the order holding
+  the most energy wins, and its share of the energy is the confidence.
+* **branch** from the relative phase of the sidewall and tread sensors' residues: in phase
+  ("same", ω₁ of the model) or opposite ("opposite", ω₂).
+* **aliases**: a grid of N points cannot tell n from N − n, N + n, …. Within a branch the
+  model's frequencies rise with n, so once a branch has reached the grid's top order
+  ⌊N/2⌋, a mode whose spatial order falls below one already passed at a lower frequency,
+  and whose spatial order a lower mode of the branch already holds, takes the smallest
+  alias that keeps the order rising. A spatial order not yet seen on the branch is its
+  own (n = 0, the breathing mode, is out of the branch's order whenever the belt's
+  extension or a tangential stiffness lifts it). A spatial order that a clear mode of the
+  branch holds more than 5 % lower (farther than a split pair) is an alias even before the
+  mark reaches ⌊N/2⌋: each order appears once per branch. Only clear modes (both
+  confidences ≥ 0.5, significance ≥ 0.3) move the mark; a mode clear only in its own order
+  group moves it by continuing the branch (at most two orders up).
+* **confidences**: ``n_confidence`` is the winning order's energy share; the branch's is
+  |Re ρ| / (‖t‖‖s‖) with ρ = tᴴs the tread–sidewall product (1: perfectly in or out of
+  phase). A mode whose tread barely moves (high-n same-direction modes) gets a low one.
+* **dispersion order**: of two modes of a branch whose orders fall as the frequency rises,
+  the less significant is flagged ``in_order = False`` (``identify`` leaves it out).
+* **split pairs**: two modes with one (n, branch) within 5 % in frequency, both in their
+  branch's dispersion order, are the cos/sin members of a pair split by a broken symmetry;
+  both are reported, with the splitting (a third mode of that (n, branch) out of order —
+  a misread, e.g. another order's mode seen in this order's group when the symmetry is
+  broken — does not undo the pair).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tiremodal_cli.modal.spatial import harmonic_design, max_order
+
+__all__ = ["Classification", "classify"]
+
+
+@dataclass(frozen=True)
+class Classification:
+    n: int
+    n_spatial: int
+    n_confidence: float
+    aliased: bool
+    branch: str | None
+    branch_confidence: float = 0.0
+    pair: int | None = None
+    splitting_hz: float | None = None
+    in_order: bool = True
+    crowd: bool = False
+    n_candidates: tuple = ()
+
+    def to_dict(self):
+        return {"n": self.n, "n_spatial": self.n_spatial, "n_confidence": self.n_confidence,
+                "n_aliased": self.aliased, "branch": self.branch, "branch_confidence": self.branch_confidence,
+                "pair": self.pair, "splitting_hz": self.splitting_hz, "in_order": self.in_order,
+                "crowd": self.crowd, "n_candidates": list(self.n_candidates)}
+
+
+def _real(v):
+    """A complex shape turned real along its principal direction."""
+    phi = 0.5 * np.angle(np.sum(v**2))
+    return np.real(v * np.exp(-1j * phi))
+
+
+def order_energy(shape_over_points, angles_rad) -> dict[int, float]:
+    """Share of a real shape's energy in each circumferential order (least squares)."""
+    x = np.asarray(shape_over_points, dtype=float)
+    n_p = x.size
+    n_max = max_order(n_p)
+    D, names = harmonic_design(angles_rad, n_max)
+    while D.shape[1] > n_p:
+        n_max -= 1
+        D, names = harmonic_design(angles_rad, n_max)
+    coef = np.linalg.lstsq(D, x, rcond=None)[0]
+    energy: dict[int, float] = {}
+    for c, (n, _) in zip(coef, names):
+        col = D[:, names.index((n, _))]
+        energy[n] = energy.get(n, 0.0) + float(c**2 * col @ col)
+    tot = sum(energy.values())
+    return {n: e / tot for n, e in energy.items()} if tot > 0 else energy
+
+
+def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
+             damping_ratio=None, significance_group=None) -> list[Classification]:
+    """Classify every mode.
+
+    Parameters
+    ----------
+    freq_hz : (n_modes,) array
+    shapes : (n_modes, n_channels, n_points) complex array     residues
+    point_angle : (n_points,) array, rad
+    channel_location : sequence of str
+    significance : (n_modes,) array, optional — only modes ≥ 0.3 move the alias mark
+    damping_ratio : (n_modes,) array, optional — for the crowd test (see :func:`_crowds`)
+    significance_group : (n_modes,) array, optional — each mode's share of the response in
+        its own order group: a mode ≥ 0.3 there (but not in the physical FRFs) moves the
+        alias mark only by continuing the branch (to at most two orders above the mark)
+
+    Returns
+    -------
+    list of Classification, in the order of ``freq_hz``
+    """
+    locs = list(channel_location)
+    it = locs.index("tread")
+    isw = locs.index("sidewall") if "sidewall" in locs else None
+    n_p = len(point_angle)
+    out = []
+    for r in range(len(freq_hz)):
+        tread = shapes[r, it]
+        e = order_energy(_real(tread), point_angle)
+        n_s = max(e, key=e.get)
+        branch, b_conf = None, 0.0
+        if isw is not None and np.all(np.isfinite(shapes[r, isw])):
+            side = shapes[r, isw]
+            rho = np.vdot(tread, side)
+            branch = "same" if rho.real >= 0 else "opposite"
+            den = np.linalg.norm(tread) * np.linalg.norm(side)
+            b_conf = float(abs(rho.real) / den) if den > 0 else 0.0
+        out.append([n_s, float(e[n_s]), branch, b_conf])
+    # alias resolution: within a branch, n rises with frequency; aliasing can only start
+    # once the branch has reached the grid's highest order (⌊N/2⌋), and only clear modes
+    # (both confidences ≥ 0.5) move the mark
+    ns = [o[0] for o in out]
+    n_top = max_order(n_p)
+    for br in {o[2] for o in out}:
+        idx = sorted((r for r in range(len(out)) if out[r][2] == br), key=lambda r: freq_hz[r])
+        top = -1
+        for i, r in enumerate(idx):
+            n = out[r][0]
+            # an alias needs its true order seen below it: the lower spatial order alone is
+            # no evidence (the breathing mode n = 0 can sit anywhere on the branch: with a
+            # stiff tangential or membrane term it lies above dozens of orders)
+            # ... and a spatial order that a clear lower mode of the branch holds, more than a
+            # split pair's 5 % below, is an alias whether or not the mark reached ⌊N/2⌋
+            # (each order appears once per branch)
+            seen = [q for q in idx[:i] if out[q][0] == n]
+            far = any(freq_hz[r] - freq_hz[q] > 0.05 * freq_hz[r] and out[q][1] >= 0.5 and out[q][3] >= 0.5
+                      and (significance is None or significance[q] >= 0.3) for q in seen)
+            if (n < top and top >= n_top - 1 and seen) or far:
+                k = 1
+                cands = []
+                while not cands or min(cands) < top:
+                    cands = [c for c in (k * n_p - out[r][0], k * n_p + out[r][0]) if c >= top]
+                    k += 1
+                    if k > 10:
+                        break
+                n = min(cands) if cands else n
+            ns[r] = n
+            sure = out[r][1] >= 0.5 and out[r][3] >= 0.5
+            clear = sure and (significance is None or significance[r] >= 0.3)
+            # a mode weak in the physical FRFs but clear in its own group (an order beside a
+            # far stronger one of another order) continues the branch one order at a time
+            # (one missed order allowed); a jump is a mode of another kind seen through the
+            # tread (a cavity mode)
+            weak_next = (sure and significance_group is not None and significance_group[r] >= 0.3
+                         and top < n <= top + 2)
+            if clear or weak_next:
+                top = max(top, n)
+    # dispersion order: within a branch n rises with frequency; a mode whose n exceeds that
+    # of a higher, at least as significant mode of its branch is out of order (a misread)
+    sig = np.ones(len(out)) if significance is None else np.asarray(significance)
+    # (of two modes out of order the less significant is the misread: a weak mode far above
+    # the branch's saturation read as a high alias is flagged as well)
+    in_order = np.ones(len(out), dtype=bool)
+    for r in range(len(out)):
+        for q in range(len(out)):
+            if q != r and out[q][2] == out[r][2] and freq_hz[q] > freq_hz[r] and ns[q] < ns[r]:
+                in_order[r if sig[q] >= sig[r] else q] = False
+    # a mode whose branch cannot be read (the co-located tread and sidewall sensors sit at
+    # its node) beside a clear mode of the same n within 5 % is taken as that mode's partner
+    for r in range(len(out)):
+        if out[r][3] >= 0.5:
+            continue
+        partners = [q for q in range(len(out)) if q != r and ns[q] == ns[r] and out[q][3] >= 0.5
+                    and abs(freq_hz[q] - freq_hz[r]) < 0.05 * freq_hz[r]]
+        if len(partners) == 1 and sum(1 for q in range(len(out)) if ns[q] == ns[r]
+                                      and out[q][2] == out[partners[0]][2]) == 1:
+            out[r][2] = out[partners[0]][2]
+    crowd = _crowds(freq_hz, damping_ratio, ns, [o[0] for o in out], [o[2] for o in out],
+                    [o[1] >= 0.5 and o[3] >= 0.5 for o in out], n_p)
+    # split pairs
+    res = []
+    pair_id = {}
+    for r in range(len(out)):
+        key = (ns[r], out[r][2])
+        if in_order[r]:  # a mode out of its branch's order is a misread, no member of a pair
+            pair_id.setdefault(key, []).append(r)
+    for r in range(len(out)):
+        members = pair_id.get((ns[r], out[r][2]), []) if in_order[r] else []
+        pid = split = None
+        if len(members) == 2 and abs(freq_hz[members[0]] - freq_hz[members[1]]) < 0.05 * freq_hz[r]:
+            pid = min(members)
+            split = float(abs(freq_hz[members[0]] - freq_hz[members[1]]))
+        cands = crowd[r]
+        res.append(Classification(n=int(ns[r]), n_spatial=int(out[r][0]),
+                                  # a crowd's order cannot be told: its share of the candidates
+                                  n_confidence=out[r][1] / len(cands) if cands else out[r][1],
+                                  aliased=bool(ns[r] != out[r][0] or any(c > n_top for c in cands)),
+                                  branch=out[r][2], branch_confidence=out[r][3], pair=pid,
+                                  splitting_hz=split, in_order=bool(in_order[r]), crowd=bool(cands),
+                                  n_candidates=tuple(cands)))
+    return res
+
+
+def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points):
+    """Modes whose order cannot be told: other orders that alias onto the same spatial
+    order (n' ≡ ±n_s mod N) lie, by their branch's dispersion, within one half-power
+    bandwidth 2ζf of the mode.
+
+    The branch's dispersion f(n) is the clear modes' (both confidences ≥ 0.5) frequencies
+    against their orders, interpolated, and beyond the highest measured order continued
+    with the last step's slope (the same-direction branch flattens under the sidewall
+    resonance, where many orders pile up). Candidates run up to 1.5 N; an alias order
+    that another mode of the branch holds is no candidate (its pole was found apart from
+    this one, so the two were resolved). Returns, per mode,
+    the sorted candidate orders (the mode's own included) when it is in a crowd, else ().
+    """
+    k = len(freq_hz)
+    out = [()] * k
+    if damping_ratio is None or k == 0:
+        return out
+    f = np.asarray(freq_hz, dtype=float)
+    z = np.asarray(damping_ratio, dtype=float)
+    n_hi = int(1.5 * n_points)
+    for br in {b for b in branch if b is not None}:
+        pts = sorted({ns[r]: f[r] for r in range(k) if branch[r] == br and clear[r]}.items())
+        if len(pts) < 2:
+            continue
+        nn = np.array([p[0] for p in pts], dtype=float)
+        ff = np.maximum.accumulate(np.array([p[1] for p in pts]))  # f(n) rises along a branch
+        slope = max(0.0, (ff[-1] - ff[-2]) / max(nn[-1] - nn[-2], 1.0))
+
+        def f_of(n):
+            return float(np.interp(n, nn, ff)) if n <= nn[-1] else float(ff[-1] + slope * (n - nn[-1]))
+
+        for r in range(k):
+            if branch[r] != br:
+                continue
+            m = n_spatial[r]
+            alias = {c for j in range(0, n_hi // max(n_points, 1) + 2)
+                     for c in (j * n_points - m, j * n_points + m) if 0 <= c <= n_hi}
+            bw = 2 * z[r] * f[r]
+            # an alias order that another mode of the branch already holds was resolved:
+            # the estimator found its pole apart from this one
+            held = {ns[q] for q in range(k) if q != r and branch[q] == br and ns[q] != ns[r]}
+            near = sorted(c for c in alias if abs(f_of(c) - f[r]) <= bw and (c == ns[r] or c not in held))
+            if len(near) > 1:
+                out[r] = tuple(int(c) for c in near)
+    return out

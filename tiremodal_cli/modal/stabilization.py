@@ -1,0 +1,251 @@
+"""Stabilization diagram and automatic selection of the physical poles.
+
+Each order's in-band poles with positive damping below ``zeta_max`` are compared with the
+previous order's: a pole is *stable* when some pole there lies within ``tol_freq``
+(relative frequency), ``tol_damping`` (relative damping) and ``tol_mac`` (MAC of the
+shapes). Stable poles are then clustered across orders: a pole joins the cluster whose
+mean shape it matches best (MAC ≥ ``cluster_mac``) within ``cluster_freq`` of the
+cluster's median frequency, at most one pole per order; clusters seen at fewer than
+``min_count`` orders, with implausible damping, or with inconsistent shapes (mean MAC
+to the cluster's shape below ``cluster_mac``) are rejected as computational. One
+representative per cluster: the member closest to the cluster's median frequency and
+damping. Every decision is kept (``Cluster.reason``) so the choice can be explained.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+
+from tiremodal_cli.modal.lsce import Band, OrderPoles
+from tiremodal_cli.modal.mac import mac
+
+__all__ = ["StabilizationOptions", "StablePole", "Cluster", "Diagram", "stabilize"]
+
+
+@dataclass(frozen=True)
+class StabilizationOptions:
+    """Tolerances (fractions) of the stability test and the clustering."""
+
+    tol_freq: float = 0.01
+    tol_damping: float = 0.05
+    tol_mac: float = 0.98
+    zeta_max: float = 0.2
+    cluster_freq: float = 0.01
+    cluster_mac: float = 0.9
+    min_count: int | None = None  # default: 15 % of the orders swept, at least 3
+
+
+@dataclass
+class StablePole:
+    order: int
+    s: complex
+    freq_hz: float
+    damping_ratio: float
+    shape: np.ndarray  # reduced (principal-space) amplitudes
+    status: str  # "stable", "f", "fd", "fv", "new"
+    participation: np.ndarray | None = None  # poly-reference participation factors
+
+
+@dataclass
+class Cluster:
+    """Stable poles across orders that are one mode (or a computational artefact)."""
+
+    members: list = field(default_factory=list)
+    orders: set = field(default_factory=set)
+    adopted: bool = False
+    reason: str = ""
+    representative: StablePole | None = None
+
+    @property
+    def freq_hz(self) -> float:
+        return float(np.median([m.freq_hz for m in self.members]))
+
+    @property
+    def damping_ratio(self) -> float:
+        return float(np.median([m.damping_ratio for m in self.members]))
+
+    def mean_shape(self):
+        ref = self.members[0].shape
+        acc = np.zeros_like(ref)
+        for m in self.members:
+            ph = np.vdot(m.shape, ref)  # align phases before adding
+            acc = acc + m.shape * (np.conj(ph) / abs(ph) if abs(ph) > 0 else 1)
+        return acc
+
+    def to_dict(self) -> dict:
+        f = np.array([m.freq_hz for m in self.members])
+        z = np.array([m.damping_ratio for m in self.members])
+        return {"frequency_hz": self.freq_hz, "damping_ratio": self.damping_ratio,
+                "n_poles": len(self.members), "orders": [m.order for m in self.members],
+                "frequency_spread_pct": float(100 * (f.max() - f.min()) / np.median(f)),
+                "frequency_std_hz": float(np.std(f, ddof=1)) if f.size > 1 else 0.0,
+                "damping_spread_pct": float(100 * (z.max() - z.min()) / max(np.median(z), 1e-12)),
+                "adopted": self.adopted, "reason": self.reason,
+                "representative_order": None if self.representative is None else self.representative.order}
+
+
+@dataclass(frozen=True)
+class Diagram:
+    """All candidate poles per order with their stability status, and the clusters."""
+
+    poles: list  # list of StablePole (every in-band candidate of every order)
+    clusters: list  # list of Cluster
+    orders: list
+
+    def selected(self) -> list:
+        return sorted((c for c in self.clusters if c.adopted), key=lambda c: c.representative.freq_hz)
+
+
+def _shapes(band: Band, s, max_lines: int = 128):
+    """Residues of the candidate poles in the principal responses, for the MAC test.
+
+    A complex least-squares fit on ≤ 128 lines of the band with the basis 1/(iω − s_r) of
+    the candidates and a constant (the rest), solved through its normal equations: cheap,
+    and a fit in frequency keeps close poles apart better than the impulse responses'
+    Vandermonde system. (The final shapes come from the full LSFD, :mod:`.lsfd`.)
+    """
+    if len(s) == 0:
+        return np.zeros((0, band.prf.shape[0]), dtype=complex)
+    k = max(1, band.freq_hz.size // max_lines)
+    jw = 2j * np.pi * band.freq_hz[::k, None]
+    A = np.concatenate([1.0 / (jw - np.asarray(s)[None, :]), np.ones_like(jw)], axis=1)
+    A /= np.linalg.norm(A, axis=0)
+    G = A.conj().T @ A
+    G[np.diag_indices_from(G)] += 1e-12 * np.trace(G).real / G.shape[0]  # keep it positive definite
+    rhs = A.conj().T @ band.prf[:, ::k].T
+    try:
+        x = scipy.linalg.cho_solve(scipy.linalg.cho_factor(G, check_finite=False), rhs, check_finite=False)
+    except (scipy.linalg.LinAlgError, ValueError):
+        x = scipy.linalg.lstsq(A, band.prf[:, ::k].T, lapack_driver="gelsy")[0]
+    return x[:len(s)]
+
+
+def _candidates(op: OrderPoles, band: Band, zeta_max: float):
+    f_hi = band.f_lo + band.width_hz
+    keep = (op.freq_hz >= band.f_lo) & (op.freq_hz <= f_hi) & (op.damping_ratio > 0) & \
+        (op.damping_ratio < zeta_max) & (np.abs(op.z) < 1)
+    return np.flatnonzero(keep)
+
+
+def stabilize(band: Band, sweep_result: list[OrderPoles], opt: StabilizationOptions = StabilizationOptions()) -> Diagram:
+    """Stability status of every candidate pole, clustering and selection."""
+    poles, prev = [], None
+    for op in sweep_result:
+        idx = _candidates(op, band, opt.zeta_max)
+        # poly-reference poles carry participation vectors: those tell the members of a
+        # split pair apart where a shape fitted per order would mix them
+        shapes = op.participation[idx] if op.participation is not None else _shapes(band, op.s[idx])
+        cur = []
+        for k, i in enumerate(idx):
+            sp = StablePole(op.order, complex(op.s[i]), float(op.freq_hz[i]), float(op.damping_ratio[i]),
+                            shapes[k], "new", None if op.participation is None else op.participation[i])
+            if prev:
+                pf = np.array([q.freq_hz for q in prev])
+                j = int(np.argmin(np.abs(pf - sp.freq_hz)))
+                q = prev[j]
+                ok_f = abs(q.freq_hz - sp.freq_hz) <= opt.tol_freq * sp.freq_hz
+                ok_d = abs(q.damping_ratio - sp.damping_ratio) <= opt.tol_damping * sp.damping_ratio
+                ok_v = mac(q.shape, sp.shape) >= opt.tol_mac
+                sp.status = ("stable" if ok_f and ok_d and ok_v else "fd" if ok_f and ok_d else
+                             "fv" if ok_f and ok_v else "f" if ok_f else "new")
+            cur.append(sp)
+        poles.extend(cur)
+        prev = cur
+    orders = [op.order for op in sweep_result]
+    min_count = opt.min_count if opt.min_count is not None else max(3, int(round(0.15 * len(orders))))
+    clusters = _cluster([p for p in poles if p.status == "stable"], opt)
+    for c in clusters:
+        _judge(c, opt, min_count)
+    _drop_duplicates(clusters, opt)
+    return Diagram(poles=poles, clusters=clusters, orders=orders)
+
+
+def _shape_informative(c) -> bool:
+    """True when a cluster's shapes have more than one component: only then can a MAC tell
+    two modes apart (with one reference and one response every MAC is 1)."""
+    return np.size(c.members[0].shape) > 1
+
+
+def _drop_duplicates(clusters, opt):
+    """Of two adopted clusters that are one mode, keep the one stable at more orders.
+
+    Where the shapes can differ (more than one component: several references, or
+    participation vectors), two clusters within ``cluster_freq`` whose MAC is ≥
+    ``cluster_mac`` are one mode. With one-component shapes every MAC is 1 and is no
+    evidence: the poles decide, and two clusters are one mode only when the second lies
+    in the first's half-power band (|Δf| ≤ ζ f of the more persistent one).
+    """
+    adopted = sorted((c for c in clusters if c.adopted), key=lambda c: -len(c.members))
+    kept = []
+    for c in adopted:
+        twin = None
+        for k in kept:
+            if _shape_informative(k):
+                if (abs(k.freq_hz - c.freq_hz) > opt.cluster_freq * c.freq_hz
+                        or mac(k.mean_shape(), c.mean_shape()) < opt.cluster_mac):
+                    continue
+            elif abs(k.freq_hz - c.freq_hz) > k.damping_ratio * k.freq_hz:
+                continue
+            twin = k
+            break
+        if twin is None:
+            kept.append(c)
+        else:
+            c.adopted = False
+            c.reason = (f"duplicate of the mode at {twin.freq_hz:.3f} Hz: within its half-power band "
+                        f"(stable at {len(twin.members)} orders against {len(c.members)})")
+
+
+def _cluster(stable, opt):
+    clusters: list[Cluster] = []
+    means: list[np.ndarray] = []
+    f_mean = []  # running mean frequency of each cluster (a cheap stand-in for the median)
+    for p in sorted(stable, key=lambda q: (q.freq_hz, q.order)):
+        best, best_mac = None, opt.cluster_mac
+        fm = np.asarray(f_mean)
+        near = np.flatnonzero(np.abs(fm - p.freq_hz) <= opt.cluster_freq * p.freq_hz) if fm.size else []
+        # the best-matching shape (MAC ≥ cluster_mac); among equal MACs — with one reference
+        # every MAC is 1 — the nearest cluster in frequency
+        best_key = (best_mac - 1e-9, -np.inf)
+        for ci in near:
+            c = clusters[ci]
+            if p.order in c.orders:
+                continue
+            key = (round(mac(means[ci], p.shape), 9), -abs(fm[ci] - p.freq_hz))
+            if key > best_key:
+                best, best_key = ci, key
+        if best is None:
+            clusters.append(Cluster(members=[p]))
+            clusters[-1].orders = {p.order}
+            means.append(p.shape.copy())
+            f_mean.append(p.freq_hz)
+        else:
+            c = clusters[best]
+            ph = np.vdot(p.shape, means[best])
+            means[best] = means[best] + p.shape * (np.conj(ph) / abs(ph) if abs(ph) > 0 else 1)
+            f_mean[best] += (p.freq_hz - f_mean[best]) / (len(c.members) + 1)
+            c.members.append(p)
+            c.orders.add(p.order)
+    return clusters
+
+
+def _judge(c: Cluster, opt, min_count):
+    f = np.array([m.freq_hz for m in c.members])
+    z = np.array([m.damping_ratio for m in c.members])
+    fm, zm = np.median(f), np.median(z)
+    score = np.abs(f - fm) / fm + np.abs(z - zm) / max(zm, 1e-12)
+    c.representative = c.members[int(np.argmin(score))]
+    shape = c.mean_shape()
+    consistency = float(np.mean([mac(shape, m.shape) for m in c.members]))
+    if len(c.members) < min_count:
+        c.reason = f"computational: stable at {len(c.members)} orders (< {min_count})"
+    elif not 0 < zm < opt.zeta_max:
+        c.reason = f"implausible damping ratio {zm:.4f}"
+    elif consistency < opt.cluster_mac:
+        c.reason = f"inconsistent shapes across orders (mean MAC {consistency:.3f} < {opt.cluster_mac})"
+    else:
+        c.adopted = True
+        c.reason = f"stable at {len(c.members)} orders, shape consistency {consistency:.3f}"

@@ -1,0 +1,1 @@
+"""The whole loop: run, batch over folders, the report."""
