@@ -26,8 +26,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from tiremodal_cli.conventions import FRF_FORMS
 from tiremodal_cli.errors import DataFormatError, ParameterError
-from tiremodal_cli.frf.hits import _clip_count, bounce_from_segments, double_hit, pulse_extent, pulse_segments
+from tiremodal_cli.frf.hits import clip_count, bounce_from_segments, double_hit, pulse_extent, pulse_segments
 from tiremodal_cli.frf.windows import exponential_window, force_window
 
 log = logging.getLogger(__name__)
@@ -36,7 +37,7 @@ __all__ = ["ESTIMATORS", "FORMS", "FRFOptions", "FRFResult", "Rejection", "estim
            "compute_frf", "convert_form"]
 
 ESTIMATORS = ("H1", "H2", "Hv")
-FORMS = ("accelerance", "mobility", "receptance")
+FORMS = FRF_FORMS
 
 
 @dataclass(frozen=True)
@@ -266,8 +267,8 @@ def _time_checks(f, y, fs, opt, names, ip):
     if not opt.check_hits:
         return rej, bad, pk_y, None
     extent = pulse_extent(f, fs, peak_index=np.argmax(af, axis=-1))
-    clip_f = _clip_count(af, pk_f) > 0
-    n_at = _clip_count(ay, pk_y)
+    clip_f = clip_count(af, pk_f) > 0
+    n_at = clip_count(ay, pk_y)
     clip_y = n_at > 0
     const_y = n_at == y.shape[-1]  # every sample at the peak: a flat line
     dbl = double_hit(f, fs, min_relative=opt.double_hit_relative, extent=extent)

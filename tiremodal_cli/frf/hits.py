@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["clipped_samples", "is_clipped", "double_hit", "pulse_extent", "bounce_in_pulse", "pulse_segments",
-           "bounce_from_segments"]
+           "bounce_from_segments", "clip_count"]
 
 
 def clipped_samples(x, *, axis=-1, min_run: int = 2, min_count: int = 3, rtol: float = 1e-6) -> np.ndarray:
@@ -30,11 +30,22 @@ def clipped_samples(x, *, axis=-1, min_run: int = 2, min_count: int = 3, rtol: f
     count : (...) ndarray of int   samples at the limit in clipped records, else 0
     """
     a = np.abs(np.moveaxis(np.asarray(x), axis, -1))
-    return _clip_count(a, a.max(axis=-1), min_run=min_run, min_count=min_count, rtol=rtol)
+    return clip_count(a, a.max(axis=-1), min_run=min_run, min_count=min_count, rtol=rtol)
 
 
-def _clip_count(a, peak, *, min_run=2, min_count=3, rtol=1e-6):
-    """:func:`clipped_samples` from |x| and its peak (for callers that have them)."""
+def clip_count(a, peak, *, min_run=2, min_count=3, rtol=1e-6):
+    """:func:`clipped_samples` from |x| and its peak (for callers that have them).
+
+    Parameters
+    ----------
+    a : (..., n_samples) ndarray        |x|, the records' magnitudes
+    peak : (...) ndarray                their peaks (``a.max(axis=-1)``)
+    min_run, min_count, rtol            as for :func:`clipped_samples`
+
+    Returns
+    -------
+    (...) ndarray of int                samples in runs at the peak (0: not clipped)
+    """
     at = a >= (peak * (1 - rtol))[..., None]
     count = np.where(peak > 0, np.count_nonzero(at, axis=-1), 0)
     run = np.zeros(count.shape, dtype=bool)

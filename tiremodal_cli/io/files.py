@@ -23,10 +23,12 @@ def _umask() -> int:
     return mask
 
 
-_UMASK = _umask()
+#: the process's file-creation mask, read once (reading it means setting it: not thread-safe)
+UMASK = _umask()
+_UMASK = UMASK  # the old name, still imported by workflow/ (to go once they import UMASK)
 
 __all__ = ["atomic_path", "check_overwrite", "dumps", "install_dir", "sha256_file", "write_text_atomic",
-           "refuse_input_as_output", "path_lock", "check_size"]
+           "refuse_input_as_output", "path_lock", "check_size", "UMASK"]
 
 
 def _same_or_inside(out: Path, inp: Path) -> bool:
@@ -155,7 +157,7 @@ def atomic_path(target: str | os.PathLike, *, overwrite: bool = False) -> Iterat
     tmp_path = Path(tmp)
     try:
         yield tmp_path
-        os.chmod(tmp_path, 0o666 & ~_UMASK)  # mkstemp makes 0600; give what open() would
+        os.chmod(tmp_path, 0o666 & ~UMASK)  # mkstemp makes 0600; give what open() would
         os.replace(tmp_path, target)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):

@@ -22,17 +22,18 @@ import numpy as np
 import pyuff
 
 from tiremodal_cli import __version__
+from tiremodal_cli.conventions import FORM_UNITS
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import atomic_path
 from tiremodal_cli.frf.estimate import FRFResult, Rejection
-from tiremodal_cli.io.measurement import _attr_str, _strings, open_hdf5
+from tiremodal_cli.io.measurement import attr_str, open_hdf5, read_strings
 
 __all__ = ["FORMAT_NAME", "write_frf", "read_frf", "write_frf_uff", "read_frf_uff", "describe_frf", "describe_frf_uff",
            "is_uff", "UNITS", "RESPONSE_UNITS", "FORCE_UNITS"]
 
 FORMAT_NAME = "tiremodal.frf"
 FORMAT_VERSION = 1
-UNITS = {"accelerance": "m/s^2/N", "mobility": "m/s/N", "receptance": "m/N"}
+UNITS = FORM_UNITS
 _SPEC = {"accelerance": 12, "mobility": 11, "receptance": 8}  # UFF specific data types
 
 
@@ -99,7 +100,7 @@ def read_frf(path) -> FRFResult:
     """
     where = str(path)
     with open_hdf5(path) as h:
-        fmt = _attr_str(h.attrs, "format")
+        fmt = attr_str(h.attrs, "format")
         if fmt != FORMAT_NAME:
             raise DataFormatError(f"{where}: format={fmt!r} is not an FRF file; expected {FORMAT_NAME!r}")
         if int(h.attrs.get("format_version", -1)) != FORMAT_VERSION:
@@ -111,7 +112,7 @@ def read_frf(path) -> FRFResult:
                 raise DataFormatError(f"{where}: dataset {k!r} is missing")
         try:
             d = {k: h[k][()] for k in need if k not in ("channel_name", "channel_location", "dead_channels")}
-            names, locs, dead = (_strings(h[k]) for k in ("channel_name", "channel_location", "dead_channels"))
+            names, locs, dead = (read_strings(h[k]) for k in ("channel_name", "channel_location", "dead_channels"))
             a = dict(h.attrs)
         except (OSError, ValueError, TypeError) as exc:
             raise DataFormatError(f"{where}: cannot read ({exc}); the file may be truncated") from None

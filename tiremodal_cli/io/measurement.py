@@ -14,11 +14,13 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from tiremodal_cli.frf.hits import clipped_samples
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import atomic_path
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "LOCATIONS", "Measurement", "read_measurement",
-           "write_measurement", "open_hdf5", "validate", "check_finite", "describe", "file_format", "open_measurement"]
+           "write_measurement", "open_hdf5", "validate", "check_finite", "describe", "file_format", "open_measurement",
+           "attr_str", "read_strings"]
 
 FORMAT_NAME = "tiremodal.measurement"
 FORMAT_VERSION = 1
@@ -158,11 +160,13 @@ def open_hdf5(path: str | os.PathLike) -> h5py.File:
         raise DataFormatError(f"{path}: not a readable HDF5 file (truncated, or another format)") from None
 
 
-def _strings(ds) -> tuple[str, ...]:
+def read_strings(ds) -> tuple[str, ...]:
+    """The strings of an HDF5 string dataset (UTF-8 bytes decoded), as a tuple."""
     return tuple(v.decode("utf-8") if isinstance(v, bytes) else str(v) for v in ds[()])
 
 
-def _attr_str(attrs, name):
+def attr_str(attrs, name) -> str | None:
+    """An HDF5 attribute as a str (UTF-8 bytes decoded); None when absent."""
     if name not in attrs:
         return None
     v = attrs[name]
@@ -171,7 +175,7 @@ def _attr_str(attrs, name):
 
 def _read_header(h, where: str, *, lazy: bool) -> dict:
     """Root attributes and datasets of a measurement file, checked for presence and type."""
-    fmt = _attr_str(h.attrs, "format")
+    fmt = attr_str(h.attrs, "format")
     if fmt is None:
         _fail(where, f"root attribute 'format' is missing; expected format={FORMAT_NAME!r}")
     if fmt != FORMAT_NAME:
@@ -196,8 +200,8 @@ def _read_header(h, where: str, *, lazy: bool) -> dict:
         data["response"] = h["response"] if lazy else h["response"][()]
         data["point_angle"] = np.asarray(h["point_angle"][()], dtype=np.float64)
         data["channel_angle"] = np.asarray(h["channel_angle"][()], dtype=np.float64)
-        data["channel_name"] = _strings(h["channel_name"])
-        data["channel_location"] = _strings(h["channel_location"])
+        data["channel_name"] = read_strings(h["channel_name"])
+        data["channel_location"] = read_strings(h["channel_location"])
     except (OSError, ValueError, TypeError) as exc:
         _fail(where, f"cannot read the datasets ({exc.__class__.__name__}: {exc}); "
                      "the file may be truncated")
@@ -214,12 +218,12 @@ def _read_header(h, where: str, *, lazy: bool) -> dict:
         try:
             pressure = float(pressure)
         except (TypeError, ValueError):
-            _fail(where, f"inflation_pressure={_attr_str(h.attrs, 'inflation_pressure')!r} is not a number; "
+            _fail(where, f"inflation_pressure={attr_str(h.attrs, 'inflation_pressure')!r} is not a number; "
                          "allowed: a positive finite pressure in Pa, or no attribute")
     kwargs = dict(sample_rate=sr,
                   inflation_pressure=pressure,
-                  tire=_attr_str(h.attrs, "tire"),
-                  description=_attr_str(h.attrs, "description"))
+                  tire=attr_str(h.attrs, "tire"),
+                  description=attr_str(h.attrs, "description"))
     return {**data, **kwargs}
 
 
@@ -307,7 +311,7 @@ def write_measurement(path: str | os.PathLike, m: Measurement, *, overwrite: boo
 def file_format(path: str | os.PathLike) -> str:
     """The ``format`` attribute of a tiremodal HDF5 file (DataFormatError if none)."""
     with open_hdf5(path) as h:
-        fmt = _attr_str(h.attrs, "format")
+        fmt = attr_str(h.attrs, "format")
     if fmt is None:
         raise DataFormatError(f"{path}: not a tiremodal file (no root attribute 'format')")
     return fmt
@@ -319,8 +323,6 @@ def describe(m: Measurement) -> dict:
     Clipped samples are those in runs at a record's extreme value
     (:func:`tiremodal_cli.frf.hits.clipped_samples`).
     """
-    from tiremodal_cli.frf.hits import clipped_samples
-
     fin_f = np.isfinite(m.force)
     return {
         "format": FORMAT_NAME, "format_version": FORMAT_VERSION,

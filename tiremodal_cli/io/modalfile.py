@@ -36,7 +36,7 @@ import numpy as np
 from tiremodal_cli import __version__
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import atomic_path
-from tiremodal_cli.io.measurement import _attr_str, _strings, open_hdf5
+from tiremodal_cli.io.measurement import attr_str, open_hdf5, read_strings
 
 __all__ = ["FORMAT_NAME", "ModalTable", "table_from_result", "write_modal", "read_modal", "to_rows",
            "to_csv", "read_modal_csv", "describe_modal", "STATUS_CODES"]
@@ -269,7 +269,7 @@ def read_modal(path) -> ModalTable:
     """
     where = str(path)
     with open_hdf5(path) as h:
-        fmt = _attr_str(h.attrs, "format")
+        fmt = attr_str(h.attrs, "format")
         if fmt != FORMAT_NAME:
             raise DataFormatError(f"{where}: format={fmt!r} is not a modal file; expected {FORMAT_NAME!r}")
         try:
@@ -278,7 +278,7 @@ def read_modal(path) -> ModalTable:
                                        "in_order",
                                        "shapes", "point_angle", "point_index", "channel_angle", "fit_error",
                                        "diagram")}
-            strs = {k: _strings(h[k]) for k in ("branch", "channel_name", "channel_location")}
+            strs = {k: read_strings(h[k]) for k in ("branch", "channel_name", "channel_location")}
             d.update({k: h[k][()] for k in ("synthesis", "synthesis_freq_hz") if k in h})
             live = h["channel_live"][()].astype(bool) if "channel_live" in h else None
             a = dict(h.attrs)

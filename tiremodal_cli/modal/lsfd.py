@@ -23,9 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from tiremodal_cli.conventions import FORM_POWER
+
 __all__ = ["FORM_POWER", "LSFDResult", "lsfd", "synthesize", "mpc", "significance"]
 
-FORM_POWER = {"receptance": 0, "mobility": 1, "accelerance": 2}
 
 
 @dataclass(frozen=True)

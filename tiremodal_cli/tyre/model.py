@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from tiremodal_cli.conventions import FRF_FORMS
 from tiremodal_cli.tyre.effects import Block, resolve_effects
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.names import PARAMETERS
@@ -28,7 +29,6 @@ from tiremodal_cli.names import PARAMETERS
 __all__ = ["TyreParameters", "PAPER_PARAMETERS", "ModalModel", "block", "closed_form_hz",
            "branch_frequencies", "point_mass_pairs", "solve_modes", "observation", "frf", "paper_damping", "FRF_FORMS"]
 
-FRF_FORMS = ("receptance", "mobility", "accelerance")
 
 
 @dataclass(frozen=True)

@@ -61,6 +61,7 @@ import scipy.linalg
 import scipy.sparse
 import scipy.sparse.linalg
 
+from tiremodal_cli.conventions import FRF_FORMS
 from tiremodal_cli.errors import ParameterError
 
 __all__ = ["RingParameters", "RingModes", "ring_modes", "ring_frf", "ring_observation",
@@ -774,8 +775,8 @@ def ring_frf(modes: RingModes, freq_hz, damping_ratio, out_locations, out_angles
     -------
     H : (n_out, n_in, n_freq) complex ndarray
     """
-    if form not in ("receptance", "mobility", "accelerance"):
-        raise ParameterError(f"form={form!r}; allowed: receptance, mobility, accelerance")
+    if form not in FRF_FORMS:
+        raise ParameterError(f"form={form!r}; allowed: {', '.join(FRF_FORMS)}")
     w = 2 * np.pi * np.asarray(freq_hz, dtype=float)
     wr = 2 * np.pi * modes.freq_hz
     zeta = np.broadcast_to(np.asarray(damping_ratio, dtype=float), wr.shape)

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from tiremodal_cli import __version__
+from tiremodal_cli.conventions import FRF_FORMS
 from tiremodal_cli.diagnose.loop import DiagnoseOptions, base_fit, diagnose, report, usable_modes
 from tiremodal_cli.errors import DataFormatError, ParameterError
 from tiremodal_cli.io.files import _UMASK, dumps, install_dir, path_lock, refuse_input_as_output, sha256_file, write_text_atomic
@@ -107,8 +108,8 @@ class RunOptions:
             kw["frf_top"] = number("frf_top", lambda x: 0 < x <= 0.5, "a fraction of the sample rate in (0, 0.5]")
         if "noise_floor_pct" in kw:
             kw["noise_floor_pct"] = number("noise_floor_pct", lambda x: 0 < x <= 100, "a percentage in (0, 100]")
-        if "form" in kw and kw["form"] not in ("accelerance", "mobility", "receptance"):
-            raise bad("form", "accelerance, mobility, receptance")
+        if "form" in kw and kw["form"] not in FRF_FORMS:
+            raise bad("form", ", ".join(FRF_FORMS))
         if "pressure_from_file" in kw and not isinstance(kw["pressure_from_file"], bool):
             raise bad("pressure_from_file", "true or false")
         for k, lo, hi in (("seed", None, None), ("max_effects", 0, 5), ("predict_n", 1, 100)):
