@@ -233,7 +233,7 @@ def test_uff_export_names_a_dead_channel(tmp_path, exact_sim, caplog):
     import logging
 
     from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
-    from tiremodal_cli.io.frffile import write_frf_uff
+    from tiremodal_cli.io.frfuff import write_frf_uff
 
     r = compute_frf(exact_sim.measurement, FRFOptions(band_hz=(0.0, 300.0)))
     r = dataclasses.replace(r, dead_channels=("rim",))

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from tiremodal_cli.errors import DataFormatError
-from tiremodal_cli.io.frffile import read_frf, read_frf_uff
+from tiremodal_cli.io.frffile import read_frf
+from tiremodal_cli.io.frfuff import read_frf_uff
 
 from conftest import run_cli
 
@@ -110,7 +111,7 @@ def test_testlab_uff_gives_the_same_modes_and_fit(uff_runs):
     1e-6 and damping within 1e-4 (relative) and the same n and branch; no other mode
     appears. (At n = N/2 the sine component is sampled at its zeros and that order's reading
     turns on the points' angles to 1e-7 rad: the geometry's six digits give it because points
-    within their rounding of a uniform grid are put on it, frffile._uniform_grid.)
+    within their rounding of a uniform grid are put on it, uffgeometry.snap_to_uniform_grid.)
     Same fit: identify's and the final model's parameters within one standard error of
     each other, the same effect adopted, the RMS errors after apart by < 0.01 % (points)."""
     d, a, b = uff_runs["dir"], uff_runs["orig"], uff_runs["uff"]
@@ -267,7 +268,7 @@ def test_points_on_a_rounded_uniform_grid_are_put_on_it_and_hand_marked_ones_are
     """Six significant digits (dataset 15) of a uniform 34-point grid from 10°: the angles come
     back exactly uniform; a grid marked by hand (1 mm errors on a 0.65 m radius) stays as
     measured."""
-    from tiremodal_cli.io.frffile import _uniform_grid
+    from tiremodal_cli.io.uffgeometry import snap_to_uniform_grid as _uniform_grid
 
     N, R = 34, 0.65
     th = np.deg2rad(10) + 2 * np.pi * np.arange(N) / N
