@@ -28,7 +28,7 @@ import numpy as np
 
 from tiremodal_cli.conventions import FRF_FORMS
 from tiremodal_cli.errors import DataFormatError, ParameterError
-from tiremodal_cli.frf.hits import clip_count, bounce_from_segments, double_hit, pulse_extent, pulse_segments
+from tiremodal_cli.frf.screening import Rejection, inconsistent_hits, test_wide_checks, time_checks
 from tiremodal_cli.frf.windows import exponential_window, force_window
 
 log = logging.getLogger(__name__)
@@ -38,19 +38,6 @@ __all__ = ["ESTIMATORS", "FORMS", "FRFOptions", "FRFResult", "Rejection", "estim
 
 ESTIMATORS = ("H1", "H2", "Hv")
 FORMS = FRF_FORMS
-
-
-@dataclass(frozen=True)
-class Rejection:
-    """A rejected hit (or a whole channel when ``hit`` is None)."""
-
-    point: int | None
-    hit: int | None
-    reason: str
-    channel: str | None = None
-
-    def to_dict(self):
-        return {"point": self.point, "hit": self.hit, "channel": self.channel, "reason": self.reason}
 
 
 @dataclass(frozen=True)
@@ -219,105 +206,32 @@ def _band(freq, band_hz, fs):
     return sel
 
 
-def _leave_one_out_residual(a, p, e):
-    """How well the other hits predict each hit: ``Σ|Y_i − Ĥ_{−i} F_i|² / Σ|Y_i|²``.
+@dataclass(frozen=True)
+class _Plan:
+    """What every point of a test shares: sizes, the band's lines, precision, the exponential window."""
 
-    Ĥ_{−i} = (Σ_j a_j − a_i) / (Σ_j p_j − p_i) is the H1 of all hits but i. For consistent
-    hits this is the noise-to-signal energy, about the same for every hit; a hit that does
-    not belong stands out against the median of the hits (a channel at a node is noisy
-    for every hit and does not). Expanded, |Y − hF|² = e − 2 Re(conj(h) a) + |h|² p, so it
-    needs only the per-hit spectra products the estimate uses anyway.
-
-    a : (n_hits, n_channels, n_f) complex   conj(F) Y per hit
-    p : (n_hits, 1, n_f) real               |F|² per hit
-    e : (n_hits, n_channels, n_f) real      |Y|² per hit
-    returns (n_hits, n_channels)
-    """
-    A, P = a.sum(axis=0), p.sum(axis=0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        den = P - p
-        h = np.where(den > 0, (A - a) / np.where(den > 0, den, 1), 0)
-    res = np.sum(e - 2 * (h.real * a.real + h.imag * a.imag) + (h.real**2 + h.imag**2) * p, axis=-1)
-    sig = np.sum(e, axis=-1)
-    return np.where(sig > 0, np.clip(res, 0, None) / np.where(sig > 0, sig, 1), 0.0)
+    fs: float
+    ns: int
+    freq: np.ndarray         # (ns // 2 + 1,) Hz, every line of the records
+    sel: np.ndarray          # its lines in the band
+    lo: int
+    hi: int
+    real: type               # np.float32 or np.float64: the records' precision
+    exp_w: np.ndarray | None
+    tau: float | None
+    names: tuple
 
 
-def _time_checks(f, y, fs, opt, names, ip):
-    """Per-hit checks on one point's records.
+@dataclass(frozen=True)
+class _Averages:
+    """What the pass over the points gathered."""
 
-    Returns the rejections, a (n_hits,) mask of rejected hits and the (n_hits, n_channels)
-    record peaks (for the dead-channel test).
-    """
-    rej = []
-    n_h = f.shape[0]
-    af, ay = np.abs(f), np.abs(y)
-    pk_f, pk_y = af.max(axis=-1), ay.max(axis=-1)  # NaN and inf propagate: finiteness for free
-    fin_f, fin_y = np.isfinite(pk_f), np.isfinite(pk_y)
-    if not (fin_f.all() and fin_y.all()):
-        f = np.where(np.isfinite(f), f, 0)
-        y = np.where(np.isfinite(y), y, 0)
-        af, ay = np.abs(f), np.abs(y)
-        pk_f, pk_y = af.max(axis=-1), ay.max(axis=-1)
-    for h in range(n_h):
-        if not fin_f[h]:
-            rej.append(Rejection(ip, h, "non-finite force samples", "force"))
-        for c in np.flatnonzero(~fin_y[h]):
-            rej.append(Rejection(ip, h, "non-finite response samples", names[c]))
-    bad = ~(fin_f & fin_y.all(axis=1))
-    if not opt.check_hits:
-        return rej, bad, pk_y, None
-    extent = pulse_extent(f, fs, peak_index=np.argmax(af, axis=-1))
-    clip_f = clip_count(af, pk_f) > 0
-    n_at = clip_count(ay, pk_y)
-    clip_y = n_at > 0
-    const_y = n_at == y.shape[-1]  # every sample at the peak: a flat line
-    dbl = double_hit(f, fs, min_relative=opt.double_hit_relative, extent=extent)
-    for h in range(n_h):
-        if bad[h]:
-            continue
-        if pk_f[h] == 0:
-            rej.append(Rejection(ip, h, "zero force (no impact recorded)", "force"))
-            bad[h] = True
-            continue
-        reasons = []
-        if clip_f[h]:
-            reasons.append(Rejection(ip, h, "clipped (overloaded) force", "force"))
-        for c in np.flatnonzero(const_y[h]):
-            reasons.append(Rejection(ip, h, "dead record (constant samples)", names[c]))
-        for c in np.flatnonzero(clip_y[h] & ~const_y[h]):
-            reasons.append(Rejection(ip, h, "clipped (overloaded) response", names[c]))
-        if dbl[h]:
-            reasons.append(Rejection(ip, h, "double hit", "force"))
-        rej += reasons
-        bad[h] = bool(reasons)
-    return rej, bad, pk_y, extent
-
-
-def _test_wide_checks(m, fs, opt):
-    """Checks over every hit of the test: a bounce within the pulse (:func:`bounce_in_pulse`
-    over all the force records; read a point at a time, kept as 25 ms segments).
-
-    Returns {point: [(hit, notch_hz), ...]} and the checks that could not run, each said once
-    (a warning, and ``meta["checks_not_run"]``): the bounce check with fewer than 5 usable
-    hits in the test, the consistency check with fewer than 3 hits per point.
-    """
-    out, not_run = {}, []
-    if not opt.check_hits:
-        return out, not_run
-    n_p, n_h = m.n_points, m.n_hits
-    parts = [pulse_segments(np.asarray(m.force[ip], dtype=float), fs) for ip in range(n_p)]  # one point at a time
-    seg, noise, ok = (np.concatenate([p[k] for p in parts]) for k in range(3))
-    flags, notch, ran = bounce_from_segments(seg, noise, ok, fs, min_relative=opt.double_hit_relative)
-    if not ran:
-        not_run.append(f"double hits within the pulse (force spectrum): needs at least 5 usable hits in the test, "
-                       f"it has {n_p * n_h}")
-    for k in np.flatnonzero(flags):
-        out.setdefault(int(k) // n_h, []).append((int(k) % n_h, float(notch[k])))
-    if n_h < 3:
-        not_run.append(f"consistency of the hits: needs at least 3 hits per point, the test has {n_h}")
-    for what in not_run:
-        log.warning("hit check not run: %s", what)
-    return out, not_run
+    H: np.ndarray            # (n_channels, n_points, n_band) complex
+    coh: np.ndarray
+    n_avg: np.ndarray        # (n_points,) accepted hits
+    peaks: np.ndarray        # (n_points, n_hits, n_channels) record peaks
+    rejections: list
+    not_run: list
 
 
 def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResult:
@@ -343,72 +257,92 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
         Every hit of every point rejected (zero or non-finite force, all clipped, ...).
     """
     opt.check()
+    plan = _plan(m, opt)
+    n_p, n_c = m.n_points, m.n_channels
+    nf = plan.hi - plan.lo + 1
+    H = np.full((n_c, n_p, nf), np.nan + 0j)
+    coh = np.full((n_c, n_p, nf), np.nan)
+    n_avg = np.zeros(n_p, dtype=int)
+    rejections, peaks = [], np.zeros((n_p, m.n_hits, n_c))
+    bounce, not_run = test_wide_checks(m, plan.fs, opt)
+    for ip in range(n_p):
+        rej, n_avg[ip], peaks[ip], sums = _point(m, ip, plan, opt, bounce.get(ip, ()))
+        rejections += rej
+        if sums is not None:
+            H[:, ip], coh[:, ip] = _from_products(*sums, opt.estimator)
+        if progress:
+            progress(ip + 1, n_p)
+    return _result(m, plan, opt, _Averages(H, coh, n_avg, peaks, rejections, not_run))
+
+
+def _plan(m, opt: FRFOptions) -> _Plan:
     fs, ns = float(m.sample_rate), int(m.n_samples)
     freq = np.fft.rfftfreq(ns, 1 / fs)
     sel = _band(freq, opt.band_hz, fs)
     lo, hi = np.flatnonzero(sel)[[0, -1]]
-    names = tuple(m.channel_name)
-    n_p, n_h, n_c = m.n_points, m.n_hits, m.n_channels
     real = np.float32 if m.response.dtype == np.float32 and m.force.dtype == np.float32 else np.float64
     exp_w, tau = (exponential_window(ns, fs, end_value=opt.exp_end, tau_s=opt.exp_tau_s)
                   if (opt.exp_end or opt.exp_tau_s) else (None, None))
     if exp_w is not None:
         exp_w = exp_w.astype(real)
-    nf = hi - lo + 1
-    H = np.full((n_c, n_p, nf), np.nan + 0j)
-    coh = np.full((n_c, n_p, nf), np.nan)
-    n_avg = np.zeros(n_p, dtype=int)
-    rejections, peaks = [], np.zeros((n_p, n_h, n_c))
-    bounce, not_run = _test_wide_checks(m, fs, opt)
-    for ip in range(n_p):
-        f = np.asarray(m.force[ip], dtype=real)
-        y = np.asarray(m.response[ip], dtype=real)
-        rej, bad, peaks[ip], extent = _time_checks(f, y, fs, opt, names, ip)
-        for h, notch in bounce.get(ip, ()):
-            if not bad[h]:
-                rej.append(Rejection(ip, h, f"double hit (a bounce within the pulse: force spectrum notch at "
-                                            f"{notch:.0f} Hz)", "force"))
-                bad[h] = True
-        rejections += rej
-        acc = np.flatnonzero(~bad)
-        if acc.size:
-            if extent is not None and opt.force_window_s is None:
-                extent = (extent[0][acc], extent[1][acc])
-            else:
-                extent = None
-            if acc.size < n_h:
-                f, y = f[acc], y[acc]
-            if opt.force_window:
-                f = f * force_window(f, fs, length_s=opt.force_window_s, taper_s=opt.taper_s, extent=extent)
-            if exp_w is not None:
-                f = f * exp_w
-                y = y * exp_w
-            F = np.fft.rfft(f, axis=-1)[:, lo:hi + 1]
-            Y = np.fft.rfft(y, axis=-1)[:, :, lo:hi + 1]
-            a = np.conj(F)[:, None, :] * Y  # per-hit products, shared by check and estimate
-            p = (F.real**2 + F.imag**2)[:, None, :]
-            e = Y.real**2 + Y.imag**2
-            if opt.check_hits and acc.size >= 3:
-                # a statistic, not an estimate: every k-th line (≤ 1024 of them) tells as much
-                k = max(1, a.shape[-1] // 1024)
-                d = _leave_one_out_residual(a[..., ::k], p[..., ::k], e[..., ::k])
-                ratio = d / np.maximum(np.median(d, axis=0, keepdims=True), np.finfo(float).tiny)
-                flag = (d > opt.hit_residual_max) & (ratio > opt.hit_residual_ratio)
-                for i in np.flatnonzero(flag.any(axis=1)):
-                    c = int(np.argmax(np.where(flag[i], ratio[i], -np.inf)))
-                    rejections.append(Rejection(ip, int(acc[i]), "poor consistency with the other hits "
-                                                f"(residual {d[i, c]:.2f} of its energy, {ratio[i, c]:.1f}× the "
-                                                "hits' median)", names[c]))
-                keep = ~flag.any(axis=1)
-                if not keep.all():
-                    a, p, e, acc = a[keep], p[keep], e[keep], acc[keep]
-            if acc.size:
-                H[:, ip], coh[:, ip] = _from_products(a.sum(axis=0), p.sum(axis=0), e.sum(axis=0),
-                                                      opt.estimator)
-        n_avg[ip] = acc.size
-        if progress:
-            progress(ip + 1, n_p)
-    med = np.median(peaks.reshape(-1, n_c), axis=0)
+    return _Plan(fs, ns, freq, sel, lo, hi, real, exp_w, tau, tuple(m.channel_name))
+
+
+def _point(m, ip: int, plan: _Plan, opt: FRFOptions, bounced):
+    """One point: its checks, and the sums of the accepted hits' spectra products.
+
+    Returns the rejections, the number of hits averaged, the (n_hits, n_channels) record
+    peaks, and (Σ conj(F) Y, Σ |F|², Σ |Y|²) over the band (None: no hit accepted).
+    """
+    f = np.asarray(m.force[ip], dtype=plan.real)
+    y = np.asarray(m.response[ip], dtype=plan.real)
+    rej, bad, peaks, extent = time_checks(f, y, plan.fs, opt, plan.names, ip)
+    for h, notch in bounced:
+        if not bad[h]:
+            rej.append(Rejection(ip, h, f"double hit (a bounce within the pulse: force spectrum notch at "
+                                        f"{notch:.0f} Hz)", "force"))
+            bad[h] = True
+    acc = np.flatnonzero(~bad)
+    if not acc.size:
+        return rej, 0, peaks, None
+    a, p, e = _hit_products(f, y, acc, extent, plan, opt)
+    if opt.check_hits and acc.size >= 3:
+        keep, more = inconsistent_hits(a, p, e, acc, opt, plan.names, ip)
+        rej += more
+        if not keep.all():
+            a, p, e, acc = a[keep], p[keep], e[keep], acc[keep]
+    if not acc.size:
+        return rej, 0, peaks, None
+    return rej, acc.size, peaks, (a.sum(axis=0), p.sum(axis=0), e.sum(axis=0))
+
+
+def _hit_products(f, y, acc, extent, plan: _Plan, opt: FRFOptions):
+    """The accepted hits windowed and transformed: per-hit conj(F) Y (n_acc, n_channels, n_band),
+    |F|² (n_acc, 1, n_band) and |Y|² (n_acc, n_channels, n_band), shared by check and estimate."""
+    if extent is not None and opt.force_window_s is None:
+        extent = (extent[0][acc], extent[1][acc])
+    else:
+        extent = None
+    if acc.size < f.shape[0]:
+        f, y = f[acc], y[acc]
+    if opt.force_window:
+        f = f * force_window(f, plan.fs, length_s=opt.force_window_s, taper_s=opt.taper_s, extent=extent)
+    if plan.exp_w is not None:
+        f = f * plan.exp_w
+        y = y * plan.exp_w
+    F = np.fft.rfft(f, axis=-1)[:, plan.lo:plan.hi + 1]
+    Y = np.fft.rfft(y, axis=-1)[:, :, plan.lo:plan.hi + 1]
+    a = np.conj(F)[:, None, :] * Y
+    p = (F.real**2 + F.imag**2)[:, None, :]
+    e = Y.real**2 + Y.imag**2
+    return a, p, e
+
+
+def _result(m, plan: _Plan, opt: FRFOptions, avg: _Averages) -> FRFResult:
+    """Dead channels and failed points out, the form converted, the rejections sorted."""
+    names, n_c, n_p, n_avg = plan.names, m.n_channels, m.n_points, avg.n_avg
+    H, coh, rejections = avg.H, avg.coh, avg.rejections
+    med = np.median(avg.peaks.reshape(-1, n_c), axis=0)
     dead_ch = tuple(names[c] for c in range(n_c) if med[c] <= opt.dead_channel_relative * med.max())
     for name in dead_ch:
         rejections.append(Rejection(None, None, "dead channel (no signal in any hit)", name))
@@ -421,25 +355,28 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
         raise DataFormatError(f"every hit of every point was rejected ({'; '.join(reasons)})")
     for ip in failed:
         log.warning("point %d (%.1f°): all %d hits rejected; the point is left out", ip + 1,
-                    np.rad2deg(m.point_angle[ip]), n_h)
+                    np.rad2deg(m.point_angle[ip]), m.n_hits)
     keep_p = n_avg > 0
     if not keep_p.all():  # (copies of H and coh only when a point is left out: 15 % of the stage)
         H, coh = H[:, keep_p], coh[:, keep_p]
-    lines, Hf = convert_form(freq[sel], H, opt.form)
-    fq = freq[sel][lines]
+    lines, Hf = convert_form(plan.freq[plan.sel], H, opt.form)
     if not lines.all():
         coh = coh[..., lines]
     rejections.sort(key=lambda r: (r.point if r.point is not None else -1, r.hit if r.hit is not None else -1))
-    meta = {"force_window": {"applied": opt.force_window, "length_s": opt.force_window_s,
-                             "taper_s": opt.taper_s, "rule": "pulse extent ×2, ≥ 8 samples, 4-sample cosine tapers"
-                             if opt.force_window_s is None else "given"},
-            "exponential_window": None if tau is None else {"tau_s": tau, "end_value": float(exp_w[-1]),
-                                                            "added_decay_rate_per_s": 1.0 / tau},
-            "failed_points": [int(i) for i in failed], "precision": np.dtype(real).name,
-            "checks_not_run": not_run}
-    return FRFResult(freq_hz=fq, H=Hf, coherence=coh, n_averages=n_avg[keep_p],
+    return FRFResult(freq_hz=plan.freq[plan.sel][lines], H=Hf, coherence=coh, n_averages=n_avg[keep_p],
                      point_index=np.flatnonzero(keep_p), point_angle=np.asarray(m.point_angle)[keep_p],
                      channel_name=names, channel_location=tuple(m.channel_location),
                      channel_angle=np.asarray(m.channel_angle), rejections=tuple(rejections),
-                     dead_channels=dead_ch, estimator=opt.estimator, form=opt.form, exp_tau_s=tau,
-                     sample_rate=fs, n_samples=ns, meta=meta)
+                     dead_channels=dead_ch, estimator=opt.estimator, form=opt.form, exp_tau_s=plan.tau,
+                     sample_rate=plan.fs, n_samples=plan.ns, meta=_meta(opt, plan, failed, avg.not_run))
+
+
+def _meta(opt: FRFOptions, plan: _Plan, failed, not_run) -> dict:
+    """The windows applied, the points left out, the precision, the checks not run."""
+    return {"force_window": {"applied": opt.force_window, "length_s": opt.force_window_s,
+                             "taper_s": opt.taper_s, "rule": "pulse extent ×2, ≥ 8 samples, 4-sample cosine tapers"
+                             if opt.force_window_s is None else "given"},
+            "exponential_window": None if plan.tau is None else {"tau_s": plan.tau, "end_value": float(plan.exp_w[-1]),
+                                                                 "added_decay_rate_per_s": 1.0 / plan.tau},
+            "failed_points": [int(i) for i in failed], "precision": np.dtype(plan.real).name,
+            "checks_not_run": not_run}
