@@ -31,10 +31,11 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from tiremodal_cli.conventions import OPPOSITE, SAME
 from tiremodal_cli.modal.spatial import harmonic_design, max_order
 
 __all__ = ["Classification", "classify"]
@@ -85,6 +86,37 @@ def order_energy(shape_over_points, angles_rad) -> dict[int, float]:
     return {n: e / tot for n, e in energy.items()} if tot > 0 else energy
 
 
+@dataclass(frozen=True)
+class _Reading:
+    """What one mode's shape says on its own: its spatial order and branch, with confidences."""
+
+    n_spatial: int
+    n_confidence: float
+    branch: str | None
+    branch_confidence: float
+
+    @property
+    def sure(self) -> bool:
+        """Both confidences ≥ 0.5."""
+        return self.n_confidence >= 0.5 and self.branch_confidence >= 0.5
+
+
+@dataclass(frozen=True)
+class _Modes:
+    """The modes being classified: frequencies (Hz), readings, the number of points, and the
+    significances (physical FRFs; own order group) that decide which modes move the mark."""
+
+    freq_hz: np.ndarray
+    reads: list
+    n_points: int
+    significance: np.ndarray | None
+    significance_group: np.ndarray | None
+
+    def clear(self, r: int) -> bool:
+        """Both confidences ≥ 0.5 and (when known) significance ≥ 0.3."""
+        return self.reads[r].sure and (self.significance is None or self.significance[r] >= 0.3)
+
+
 def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
              damping_ratio=None, significance_group=None) -> list[Classification]:
     """Classify every mode.
@@ -109,102 +141,139 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     it = locs.index("tread")
     isw = locs.index("sidewall") if "sidewall" in locs else None
     n_p = len(point_angle)
-    out = []
-    for r in range(len(freq_hz)):
-        tread = shapes[r, it]
-        e = order_energy(_real(tread), point_angle)
-        n_s = max(e, key=e.get)
-        branch, b_conf = None, 0.0
-        if isw is not None and np.all(np.isfinite(shapes[r, isw])):
-            side = shapes[r, isw]
-            rho = np.vdot(tread, side)
-            branch = "same" if rho.real >= 0 else "opposite"
-            den = np.linalg.norm(tread) * np.linalg.norm(side)
-            b_conf = float(abs(rho.real) / den) if den > 0 else 0.0
-        out.append([n_s, float(e[n_s]), branch, b_conf])
-    # alias resolution: within a branch, n rises with frequency; aliasing can only start
-    # once the branch has reached the grid's highest order (⌊N/2⌋), and only clear modes
-    # (both confidences ≥ 0.5) move the mark
-    ns = [o[0] for o in out]
+    reads = [_read(shapes[r], it, isw, point_angle) for r in range(len(freq_hz))]
+    ns = _resolve_aliases(_Modes(freq_hz, reads, n_p, significance, significance_group))
+    in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
+    reads = _partners_branches(freq_hz, reads, ns)
+    crowd = _crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads],
+                    [o.sure for o in reads], n_p)
+    pairs = _split_pairs(freq_hz, reads, ns, in_order)
     n_top = max_order(n_p)
-    for br in {o[2] for o in out}:
-        idx = sorted((r for r in range(len(out)) if out[r][2] == br), key=lambda r: freq_hz[r])
-        top = -1
-        for i, r in enumerate(idx):
-            n = out[r][0]
-            # an alias needs its true order seen below it: the lower spatial order alone is
-            # no evidence (the breathing mode n = 0 can sit anywhere on the branch: with a
-            # stiff tangential or membrane term it lies above dozens of orders)
-            # ... and a spatial order that a clear lower mode of the branch holds, more than a
-            # split pair's 5 % below, is an alias whether or not the mark reached ⌊N/2⌋
-            # (each order appears once per branch)
-            seen = [q for q in idx[:i] if out[q][0] == n]
-            far = any(freq_hz[r] - freq_hz[q] > 0.05 * freq_hz[r] and out[q][1] >= 0.5 and out[q][3] >= 0.5
-                      and (significance is None or significance[q] >= 0.3) for q in seen)
-            if (n < top and top >= n_top - 1 and seen) or far:
-                k = 1
-                cands = []
-                while not cands or min(cands) < top:
-                    cands = [c for c in (k * n_p - out[r][0], k * n_p + out[r][0]) if c >= top]
-                    k += 1
-                    if k > 10:
-                        break
-                n = min(cands) if cands else n
-            ns[r] = n
-            sure = out[r][1] >= 0.5 and out[r][3] >= 0.5
-            clear = sure and (significance is None or significance[r] >= 0.3)
-            # a mode weak in the physical FRFs but clear in its own group (an order beside a
-            # far stronger one of another order) continues the branch one order at a time
-            # (one missed order allowed); a jump is a mode of another kind seen through the
-            # tread (a cavity mode)
-            weak_next = (sure and significance_group is not None and significance_group[r] >= 0.3
-                         and top < n <= top + 2)
-            if clear or weak_next:
-                top = max(top, n)
-    # dispersion order: within a branch n rises with frequency; a mode whose n exceeds that
-    # of a higher, at least as significant mode of its branch is out of order (a misread)
-    sig = np.ones(len(out)) if significance is None else np.asarray(significance)
-    # (of two modes out of order the less significant is the misread: a weak mode far above
-    # the branch's saturation read as a high alias is flagged as well)
-    in_order = np.ones(len(out), dtype=bool)
-    for r in range(len(out)):
-        for q in range(len(out)):
-            if q != r and out[q][2] == out[r][2] and freq_hz[q] > freq_hz[r] and ns[q] < ns[r]:
-                in_order[r if sig[q] >= sig[r] else q] = False
-    # a mode whose branch cannot be read (the co-located tread and sidewall sensors sit at
-    # its node) beside a clear mode of the same n within 5 % is taken as that mode's partner
-    for r in range(len(out)):
-        if out[r][3] >= 0.5:
-            continue
-        partners = [q for q in range(len(out)) if q != r and ns[q] == ns[r] and out[q][3] >= 0.5
-                    and abs(freq_hz[q] - freq_hz[r]) < 0.05 * freq_hz[r]]
-        if len(partners) == 1 and sum(1 for q in range(len(out)) if ns[q] == ns[r]
-                                      and out[q][2] == out[partners[0]][2]) == 1:
-            out[r][2] = out[partners[0]][2]
-    crowd = _crowds(freq_hz, damping_ratio, ns, [o[0] for o in out], [o[2] for o in out],
-                    [o[1] >= 0.5 and o[3] >= 0.5 for o in out], n_p)
-    # split pairs
     res = []
+    for r, o in enumerate(reads):
+        cands = crowd[r]
+        res.append(Classification(n=int(ns[r]), n_spatial=int(o.n_spatial),
+                                  # a crowd's order cannot be told: its share of the candidates
+                                  n_confidence=o.n_confidence / len(cands) if cands else o.n_confidence,
+                                  aliased=bool(ns[r] != o.n_spatial or any(c > n_top for c in cands)),
+                                  branch=o.branch, branch_confidence=o.branch_confidence, pair=pairs[r][0],
+                                  splitting_hz=pairs[r][1], in_order=bool(in_order[r]), crowd=bool(cands),
+                                  n_candidates=tuple(cands)))
+    return res
+
+
+def _read(shape, it: int, isw: int | None, point_angle) -> _Reading:
+    """One mode's (n_channels, n_points) shape read alone: the order holding most of the
+    tread's energy, and the branch from the tread–sidewall product (None: no sidewall)."""
+    tread = shape[it]
+    e = order_energy(_real(tread), point_angle)
+    n_s = max(e, key=e.get)
+    branch, b_conf = None, 0.0
+    if isw is not None and np.all(np.isfinite(shape[isw])):
+        side = shape[isw]
+        rho = np.vdot(tread, side)
+        branch = SAME if rho.real >= 0 else OPPOSITE
+        den = np.linalg.norm(tread) * np.linalg.norm(side)
+        b_conf = float(abs(rho.real) / den) if den > 0 else 0.0
+    return _Reading(n_s, float(e[n_s]), branch, b_conf)
+
+
+def _resolve_aliases(m: _Modes) -> list[int]:
+    """Each mode's order n: within a branch, n rises with frequency; aliasing can only start
+    once the branch has reached the grid's highest order (⌊N/2⌋), and only clear modes
+    (both confidences ≥ 0.5) move the mark."""
+    ns = [o.n_spatial for o in m.reads]
+    for br in {o.branch for o in m.reads}:
+        idx = sorted((r for r in range(len(m.reads)) if m.reads[r].branch == br), key=lambda r: m.freq_hz[r])
+        _walk_branch(m, idx, ns)
+    return ns
+
+
+def _walk_branch(m: _Modes, idx: list[int], ns: list[int]) -> None:
+    """:func:`_resolve_aliases` along one branch's modes ``idx`` (by frequency), into ``ns``."""
+    f, reads, n_top = m.freq_hz, m.reads, max_order(m.n_points)
+    top = -1
+    for i, r in enumerate(idx):
+        n = reads[r].n_spatial
+        # an alias needs its true order seen below it: the lower spatial order alone is
+        # no evidence (the breathing mode n = 0 can sit anywhere on the branch: with a
+        # stiff tangential or membrane term it lies above dozens of orders)
+        # ... and a spatial order that a clear lower mode of the branch holds, more than a
+        # split pair's 5 % below, is an alias whether or not the mark reached ⌊N/2⌋
+        # (each order appears once per branch)
+        seen = [q for q in idx[:i] if reads[q].n_spatial == n]
+        far = any(f[r] - f[q] > 0.05 * f[r] and m.clear(q) for q in seen)
+        if (n < top and top >= n_top - 1 and seen) or far:
+            alias = _smallest_alias_from(reads[r].n_spatial, top, m.n_points)
+            n = n if alias is None else alias
+        ns[r] = n
+        # a mode weak in the physical FRFs but clear in its own group (an order beside a
+        # far stronger one of another order) continues the branch one order at a time
+        # (one missed order allowed); a jump is a mode of another kind seen through the
+        # tread (a cavity mode)
+        weak_next = (reads[r].sure and m.significance_group is not None and m.significance_group[r] >= 0.3
+                     and top < n <= top + 2)
+        if m.clear(r) or weak_next:
+            top = max(top, n)
+
+
+def _smallest_alias_from(n_spatial: int, top: int, n_points: int) -> int | None:
+    """The smallest order k N ± n_s (k ≤ 10) at or above ``top``; None when there is none."""
+    k = 1
+    cands = []
+    while not cands or min(cands) < top:
+        cands = [c for c in (k * n_points - n_spatial, k * n_points + n_spatial) if c >= top]
+        k += 1
+        if k > 10:
+            break
+    return min(cands) if cands else None
+
+
+def _in_dispersion_order(freq_hz, reads: list[_Reading], ns: list[int], significance) -> np.ndarray:
+    """(n_modes,) bool. Within a branch n rises with frequency; of two modes out of that
+    order the less significant is the misread (a weak mode far above the branch's
+    saturation read as a high alias is flagged as well)."""
+    sig = np.ones(len(reads)) if significance is None else np.asarray(significance)
+    in_order = np.ones(len(reads), dtype=bool)
+    for r in range(len(reads)):
+        for q in range(len(reads)):
+            if q != r and reads[q].branch == reads[r].branch and freq_hz[q] > freq_hz[r] and ns[q] < ns[r]:
+                in_order[r if sig[q] >= sig[r] else q] = False
+    return in_order
+
+
+def _partners_branches(freq_hz, reads: list[_Reading], ns: list[int]) -> list[_Reading]:
+    """A mode whose branch cannot be read (the co-located tread and sidewall sensors sit at
+    its node) beside a clear mode of the same n within 5 % is taken as that mode's partner:
+    it gets the partner's branch (one mode after another, in the list's order)."""
+    reads = list(reads)
+    for r in range(len(reads)):
+        if reads[r].branch_confidence >= 0.5:
+            continue
+        partners = [q for q in range(len(reads)) if q != r and ns[q] == ns[r] and reads[q].branch_confidence >= 0.5
+                    and abs(freq_hz[q] - freq_hz[r]) < 0.05 * freq_hz[r]]
+        if len(partners) == 1 and sum(1 for q in range(len(reads)) if ns[q] == ns[r]
+                                      and reads[q].branch == reads[partners[0]].branch) == 1:
+            reads[r] = replace(reads[r], branch=reads[partners[0]].branch)
+    return reads
+
+
+def _split_pairs(freq_hz, reads: list[_Reading], ns: list[int], in_order) -> list[tuple]:
+    """Per mode (pair id, splitting in Hz), or (None, None): two in-order modes of one
+    (n, branch) within 5 % in frequency are a split pair."""
     pair_id = {}
-    for r in range(len(out)):
-        key = (ns[r], out[r][2])
+    for r in range(len(reads)):
         if in_order[r]:  # a mode out of its branch's order is a misread, no member of a pair
-            pair_id.setdefault(key, []).append(r)
-    for r in range(len(out)):
-        members = pair_id.get((ns[r], out[r][2]), []) if in_order[r] else []
+            pair_id.setdefault((ns[r], reads[r].branch), []).append(r)
+    out = []
+    for r in range(len(reads)):
+        members = pair_id.get((ns[r], reads[r].branch), []) if in_order[r] else []
         pid = split = None
         if len(members) == 2 and abs(freq_hz[members[0]] - freq_hz[members[1]]) < 0.05 * freq_hz[r]:
             pid = min(members)
             split = float(abs(freq_hz[members[0]] - freq_hz[members[1]]))
-        cands = crowd[r]
-        res.append(Classification(n=int(ns[r]), n_spatial=int(out[r][0]),
-                                  # a crowd's order cannot be told: its share of the candidates
-                                  n_confidence=out[r][1] / len(cands) if cands else out[r][1],
-                                  aliased=bool(ns[r] != out[r][0] or any(c > n_top for c in cands)),
-                                  branch=out[r][2], branch_confidence=out[r][3], pair=pid,
-                                  splitting_hz=split, in_order=bool(in_order[r]), crowd=bool(cands),
-                                  n_candidates=tuple(cands)))
-    return res
+        out.append((pid, split))
+    return out
 
 
 def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points):
