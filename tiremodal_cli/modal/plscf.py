@@ -68,12 +68,18 @@ def sweep_plscf(freq_hz, H, orders) -> list[OrderPoles]:
     if (p_max + 1) * n_ref > K:
         raise ParameterError(f"model order {p_max} is too high for {K} lines and {n_ref} reference(s)")
     dt = 1.0 / (2.0 * f[-1])
+    R, S, T = _reduced_blocks(f, H, p_max, dt)
+    return [_order_poles(R, S, T, p, n_ref, dt) for p in orders]
+
+
+def _reduced_blocks(f, H, p_max: int, dt: float):
+    """R (p+1, p+1), S_o (n_out, p+1, m), T_o (n_out, m, m) of the reduced normal equations,
+    once for the highest order (m = (p_max + 1) n_ref); an order p uses their leading blocks
+    (the basis of order p is the first p + 1 columns)."""
+    n_out, n_ref, K = H.shape
     X = np.exp(1j * 2 * np.pi * f[:, None] * dt * np.arange(p_max + 1)[None, :])  # (K, p+1)
     # scale each output so that none dominates the sum of the reduced equations
     w = 1.0 / np.maximum(np.sqrt(np.mean(np.abs(H) ** 2, axis=(1, 2))), np.finfo(float).tiny)
-    # R, S_o, T_o once for the highest order; an order p uses their leading blocks (the
-    # basis of order p is the first p + 1 columns), and the numerator's elimination is
-    # redone per order on those blocks (small: (p+1) n_ref square)
     m = (p_max + 1) * n_ref
     R = np.real(X.conj().T @ X)
     S = np.empty((n_out, p_max + 1, m))
@@ -82,32 +88,36 @@ def sweep_plscf(freq_hz, H, orders) -> list[OrderPoles]:
         Y = -(X[:, :, None] * (w[o] * H[o].T)[:, None, :]).reshape(K, m)  # columns (r, ref)
         S[o] = np.real(X.conj().T @ Y)
         T[o] = np.real(Y.conj().T @ Y)
-    out = []
-    for p in orders:
-        a, b = p * n_ref, (p + 1) * n_ref
-        Sp = S[:, :p + 1, :b]
-        G = np.linalg.solve(R[:p + 1, :p + 1], Sp.transpose(1, 0, 2).reshape(p + 1, -1)).reshape(p + 1, n_out, b)
-        Mp = T[:, :b, :b].sum(axis=0) - np.einsum("okc,kod->cd", Sp, G)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-            try:
-                alpha = scipy.linalg.solve(Mp[:a, :a], -Mp[:a, a:b], assume_a="sym")
-            except (scipy.linalg.LinAlgError, ValueError):
-                alpha = scipy.linalg.lstsq(Mp[:a, :a], -Mp[:a, a:b], lapack_driver="gelsy")[0]
-        A = [alpha[r * n_ref:(r + 1) * n_ref] for r in range(p)]  # α_r (n_ref × n_ref): Σ z^r α_r v = 0
-        C = np.zeros((a, a), dtype=complex)
-        if p > 1:
-            C[:-n_ref, n_ref:] = np.eye(a - n_ref)
-        for r in range(p):
-            C[-n_ref:, r * n_ref:(r + 1) * n_ref] = -A[r]
-        z, V = np.linalg.eig(C)
-        keep = np.abs(z) > 0
-        z, V = z[keep], V[:, keep]
-        s = np.log(z) / dt
-        up = s.imag > 0  # real coefficients: roots in conjugate pairs, one of each kept
-        z, V, s = z[up], V[:, up], s[up]
-        part = V[:n_ref].T
-        part = part / np.maximum(np.linalg.norm(part, axis=1, keepdims=True), np.finfo(float).tiny)
-        fn, zeta = poles_to_modal(s)
-        out.append(OrderPoles(p, s, z, fn, zeta, part))
-    return out
+    return R, S, T
+
+
+def _order_poles(R, S, T, p: int, n_ref: int, dt: float) -> OrderPoles:
+    """The poles of order p: the numerator eliminated on the leading blocks (small:
+    (p+1) n_ref square), the denominator's coefficients, its companion matrix's roots."""
+    n_out = S.shape[0]
+    a, b = p * n_ref, (p + 1) * n_ref
+    Sp = S[:, :p + 1, :b]
+    G = np.linalg.solve(R[:p + 1, :p + 1], Sp.transpose(1, 0, 2).reshape(p + 1, -1)).reshape(p + 1, n_out, b)
+    Mp = T[:, :b, :b].sum(axis=0) - np.einsum("okc,kod->cd", Sp, G)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+        try:
+            alpha = scipy.linalg.solve(Mp[:a, :a], -Mp[:a, a:b], assume_a="sym")
+        except (scipy.linalg.LinAlgError, ValueError):
+            alpha = scipy.linalg.lstsq(Mp[:a, :a], -Mp[:a, a:b], lapack_driver="gelsy")[0]
+    A = [alpha[r * n_ref:(r + 1) * n_ref] for r in range(p)]  # α_r (n_ref × n_ref): Σ z^r α_r v = 0
+    C = np.zeros((a, a), dtype=complex)
+    if p > 1:
+        C[:-n_ref, n_ref:] = np.eye(a - n_ref)
+    for r in range(p):
+        C[-n_ref:, r * n_ref:(r + 1) * n_ref] = -A[r]
+    z, V = np.linalg.eig(C)
+    keep = np.abs(z) > 0
+    z, V = z[keep], V[:, keep]
+    s = np.log(z) / dt
+    up = s.imag > 0  # real coefficients: roots in conjugate pairs, one of each kept
+    z, V, s = z[up], V[:, up], s[up]
+    part = V[:n_ref].T
+    part = part / np.maximum(np.linalg.norm(part, axis=1, keepdims=True), np.finfo(float).tiny)
+    fn, zeta = poles_to_modal(s)
+    return OrderPoles(p, s, z, fn, zeta, part)
