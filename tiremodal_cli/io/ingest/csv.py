@@ -62,6 +62,33 @@ def read_csv_folder(folder, channels: dict | None = None, points: dict | None = 
     folder = Path(folder)
     if not folder.is_dir():
         raise DataFormatError(f"{folder}: not a folder")
+    records = _records(folder)
+    pts = sorted(records)
+    n_hits = {len(records[p]) for p in pts}
+    if len(n_hits) != 1:
+        raise DataFormatError(f"{folder}: points have different numbers of hits ({sorted(n_hits)})")
+    header0 = next(iter(records[pts[0]].values()))[0]
+    if header0[:2] != ["time_s", "force_N"] or len(header0) < 3:
+        raise DataFormatError(f"{folder}: columns must start time_s,force_N and name ≥ 1 channel; got {header0}")
+    ch_names = header0[2:]
+    chans = _channel_table(folder, ch_names, channels)
+    pts_map = dict(points or {})
+    side = folder / "points.csv"
+    if side.is_file() and not pts_map:
+        pts_map = {str(int(r["point"])): float(np.deg2rad(float(r["angle_deg"])))
+                   for r in _side_table(side, ("point", "angle_deg"))}
+    F, Y, dt = _arrays(folder, records, header0, n_hits.pop())
+    return Measurement(force=F, response=Y, sample_rate=float(f"{1.0 / dt:.9g}"),
+                       point_angle=point_angles([str(p) for p in pts], pts_map, str(folder)),
+                       channel_name=tuple(ch_names), channel_location=tuple(chans[c][1] for c in ch_names),
+                       channel_angle=np.array([chans[c][2] for c in ch_names]),
+                       inflation_pressure=attrs.get("inflation_pressure"), tire=attrs.get("tire"),
+                       description=attrs.get("description"))
+
+
+def _records(folder: Path) -> dict:
+    """``{point: {hit: (header, data)}}`` from either layout (one file per hit, or per point
+    with a ``hit`` column), never both."""
     per_hit, per_point = {}, {}
     for f in sorted(folder.iterdir()):
         if m := _HIT.match(f.name):
@@ -76,21 +103,19 @@ def read_csv_folder(folder, channels: dict | None = None, points: dict | None = 
     if per_hit:
         for (p, h), f in per_hit.items():
             records[p][h] = _table(f)
-    else:
-        for p, f in per_point.items():
-            header, data = _table(f)
-            if header[0].lower() != "hit":
-                raise DataFormatError(f"{f}: first column must be 'hit' in a per-point file")
-            for h in np.unique(data[:, 0]).astype(int):
-                records[p][int(h)] = (header[1:], data[data[:, 0] == h, 1:])
-    pts = sorted(records)
-    n_hits = {len(records[p]) for p in pts}
-    if len(n_hits) != 1:
-        raise DataFormatError(f"{folder}: points have different numbers of hits ({sorted(n_hits)})")
-    header0 = next(iter(records[pts[0]].values()))[0]
-    if header0[:2] != ["time_s", "force_N"] or len(header0) < 3:
-        raise DataFormatError(f"{folder}: columns must start time_s,force_N and name ≥ 1 channel; got {header0}")
-    ch_names = header0[2:]
+        return records
+    for p, f in per_point.items():
+        header, data = _table(f)
+        if header[0].lower() != "hit":
+            raise DataFormatError(f"{f}: first column must be 'hit' in a per-point file")
+        for h in np.unique(data[:, 0]).astype(int):
+            records[p][int(h)] = (header[1:], data[data[:, 0] == h, 1:])
+    return records
+
+
+def _channel_table(folder: Path, ch_names: list[str], channels: dict | None) -> dict:
+    """``{name: (name, location, angle_rad)}``: the mapping's channels, else ``channels.csv``'s;
+    every column of the records needs one."""
     chans = dict(channels or {})
     side = folder / "channels.csv"
     if side.is_file():
@@ -100,15 +125,16 @@ def read_csv_folder(folder, channels: dict | None = None, points: dict | None = 
     if missing:
         raise DataFormatError(f"{folder}: channel column {missing[0]!r} has no location/angle "
                               "(add it to channels.csv or the mapping)")
-    pts_map = dict(points or {})
-    side = folder / "points.csv"
-    if side.is_file() and not pts_map:
-        pts_map = {str(int(r["point"])): float(np.deg2rad(float(r["angle_deg"])))
-                   for r in _side_table(side, ("point", "angle_deg"))}
+    return chans
+
+
+def _arrays(folder: Path, records: dict, header0: list[str], n_h: int):
+    """Force (n_points, n_hits, n_samples), responses (n_points, n_hits, n_channels,
+    n_samples) and the sample interval (s), every record checked against the first."""
+    pts = sorted(records)
     ns = next(iter(records[pts[0]].values()))[1].shape[0]
-    n_h = n_hits.pop()
     F = np.zeros((len(pts), n_h, ns))
-    Y = np.zeros((len(pts), n_h, len(ch_names), ns))
+    Y = np.zeros((len(pts), n_h, len(header0) - 2, ns))
     dt = None
     for ip, p in enumerate(pts):
         for ih, h in enumerate(sorted(records[p])):
@@ -126,9 +152,4 @@ def read_csv_folder(folder, channels: dict | None = None, points: dict | None = 
                 dt = (t[-1] - t[0]) / (ns - 1)
             F[ip, ih] = data[:, 1]
             Y[ip, ih] = data[:, 2:].T
-    return Measurement(force=F, response=Y, sample_rate=float(f"{1.0 / dt:.9g}"),
-                       point_angle=point_angles([str(p) for p in pts], pts_map, str(folder)),
-                       channel_name=tuple(ch_names), channel_location=tuple(chans[c][1] for c in ch_names),
-                       channel_angle=np.array([chans[c][2] for c in ch_names]),
-                       inflation_pressure=attrs.get("inflation_pressure"), tire=attrs.get("tire"),
-                       description=attrs.get("description"))
+    return F, Y, dt

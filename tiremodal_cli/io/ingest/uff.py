@@ -69,6 +69,25 @@ def read_uff_time(paths, channels: dict, points: dict | None = None, **attrs) ->
     attrs : inflation_pressure, tire, description
     """
     files = uff_files(paths)
+    force, resp, dt = _collect(files, channels)
+    if not force:
+        raise DataFormatError(f"{files[0]}: no force record (ordinate specific data type 13)")
+    ch_keys = list(channels)
+    nodes, F, Y = _arrays(force, resp, ch_keys)
+    # The abscissa increment field (%13.5e) carries 6 significant digits: round 1/Δt to those.
+    return Measurement(force=F, response=Y, sample_rate=float(f"{1.0 / dt:.6g}"),
+                       point_angle=point_angles(nodes, points or {}, str(files[0])),
+                       channel_name=tuple(channels[k][0] for k in ch_keys),
+                       channel_location=tuple(channels[k][1] for k in ch_keys),
+                       channel_angle=np.array([channels[k][2] for k in ch_keys]),
+                       inflation_pressure=attrs.get("inflation_pressure"),
+                       tire=attrs.get("tire"), description=attrs.get("description"))
+
+
+def _collect(files: list[Path], channels: dict):
+    """Every time record of the files, checked: ``force[ref node][hit key]``,
+    ``resp[ref node][load case][channel key]`` (a list: hits without a load case), and the
+    common sample interval (s). A hit's key is (load case, its order among the point's forces)."""
     force = defaultdict(dict)  # node -> {hit key: data}
     resp = defaultdict(lambda: defaultdict(dict))  # node -> hit key -> channel key -> data
     dt = None
@@ -79,12 +98,7 @@ def read_uff_time(paths, channels: dict, points: dict | None = None, **attrs) ->
             raise DataFormatError(f"{f}: no dataset 58 in the file")
         for s in sets:
             where = f"{f}: record node {s.get('rsp_node')}:{s.get('rsp_dir')}"
-            if int(s.get("func_type", 0)) != 1:
-                raise DataFormatError(f"{where}: function type {s.get('func_type')} is not 1 (time response)")
-            x = np.asarray(s["x"], dtype=float)
-            d = x[1] - x[0] if x.size > 1 else 0.0
-            if d <= 0 or not np.allclose(np.diff(x), d, rtol=1e-6, atol=0):
-                raise DataFormatError(f"{where}: abscissa is not evenly spaced time")
+            d = _time_step(s, where)
             if dt is None:
                 dt = d
             elif not np.isclose(d, dt, rtol=1e-9):
@@ -94,24 +108,43 @@ def read_uff_time(paths, channels: dict, points: dict | None = None, **attrs) ->
             data = np.asarray(s["data"])
             if np.iscomplexobj(data):
                 raise DataFormatError(f"{where}: complex data; time records are real")
-            kind = int(s.get("ordinate_spec_data_type", 0) or 0)
-            if kind == FORCE:
+            if int(s.get("ordinate_spec_data_type", 0) or 0) == FORCE:
                 key = (lc, order[ref]) if lc else (0, order[ref])
                 order[ref] += 1
                 force[ref][key] = data
             else:
-                if kind not in (ACCELERATION, 0):
-                    raise DataFormatError(f"{where}: ordinate type {kind} is neither force (13) nor "
-                                          "acceleration (12)")
-                ck = f"{int(s['rsp_node'])}:{int(s['rsp_dir'])}"
-                if ck not in channels:
-                    raise DataFormatError(f"{where}: response {ck} is not in the channel mapping; "
-                                          f"mapped: {', '.join(channels) or 'none'}")
-                resp[ref][lc].setdefault(ck, []).append(data)
-    if not force:
-        raise DataFormatError(f"{files[0]}: no force record (ordinate specific data type 13)")
+                resp[ref][lc].setdefault(_channel_key(s, channels, where), []).append(data)
+    return force, resp, dt
+
+
+def _time_step(s: dict, where: str) -> float:
+    """The record's sample interval (s); DataFormatError unless it is a time record evenly sampled."""
+    if int(s.get("func_type", 0)) != 1:
+        raise DataFormatError(f"{where}: function type {s.get('func_type')} is not 1 (time response)")
+    x = np.asarray(s["x"], dtype=float)
+    d = x[1] - x[0] if x.size > 1 else 0.0
+    if d <= 0 or not np.allclose(np.diff(x), d, rtol=1e-6, atol=0):
+        raise DataFormatError(f"{where}: abscissa is not evenly spaced time")
+    return d
+
+
+def _channel_key(s: dict, channels: dict, where: str) -> str:
+    """A response record's ``"node:dir"``, checked against the mapping and its ordinate type."""
+    kind = int(s.get("ordinate_spec_data_type", 0) or 0)
+    if kind not in (ACCELERATION, 0):
+        raise DataFormatError(f"{where}: ordinate type {kind} is neither force (13) nor "
+                              "acceleration (12)")
+    ck = f"{int(s['rsp_node'])}:{int(s['rsp_dir'])}"
+    if ck not in channels:
+        raise DataFormatError(f"{where}: response {ck} is not in the channel mapping; "
+                              f"mapped: {', '.join(channels) or 'none'}")
+    return ck
+
+
+def _arrays(force: dict, resp: dict, ch_keys: list[str]):
+    """The point nodes (sorted), force (n_points, n_hits, n_samples) and responses
+    (n_points, n_hits, n_channels, n_samples); every hit needs every channel once."""
     nodes = sorted(force, key=lambda k: int(k))
-    ch_keys = list(channels)
     n_hits = {len(force[n]) for n in nodes}
     if len(n_hits) != 1:
         raise DataFormatError(f"points have different numbers of hits ({sorted(n_hits)}); the layout needs one")
@@ -123,9 +156,8 @@ def read_uff_time(paths, channels: dict, points: dict | None = None, **attrs) ->
     F = np.zeros((len(nodes), n_h, ns))
     Y = np.zeros((len(nodes), n_h, len(ch_keys), ns))
     for ip, n in enumerate(nodes):
-        hit_keys = sorted(force[n])
         lcs = sorted(resp[n])
-        for ih, hk in enumerate(hit_keys):
+        for ih, hk in enumerate(sorted(force[n])):
             F[ip, ih] = force[n][hk]
             lc = hk[0]
             for ic, ck in enumerate(ch_keys):
@@ -138,14 +170,7 @@ def read_uff_time(paths, channels: dict, points: dict | None = None, **attrs) ->
                     raise DataFormatError(f"point node {n}, hit {ih + 1}: response {ck} has "
                                           f"{recs[idx].size} samples, force has {ns}")
                 Y[ip, ih, ic] = recs[idx]
-    # The abscissa increment field (%13.5e) carries 6 significant digits: round 1/Δt to those.
-    return Measurement(force=F, response=Y, sample_rate=float(f"{1.0 / dt:.6g}"),
-                       point_angle=point_angles(nodes, points or {}, str(files[0])),
-                       channel_name=tuple(channels[k][0] for k in ch_keys),
-                       channel_location=tuple(channels[k][1] for k in ch_keys),
-                       channel_angle=np.array([channels[k][2] for k in ch_keys]),
-                       inflation_pressure=attrs.get("inflation_pressure"),
-                       tire=attrs.get("tire"), description=attrs.get("description"))
+    return nodes, F, Y
 
 
 def write_uff_time(folder: str | os.PathLike, m: Measurement, *, point_node0: int = 101,
