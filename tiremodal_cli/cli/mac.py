@@ -13,44 +13,16 @@ import numpy as np
 from tiremodal_cli.io.config import load_mapping
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
-from tiremodal_cli.modal.mac import mac_matrix, subspace_mac
+from tiremodal_cli.modal.mac import analytic_bases, mac_matrix, model_bases, shape_labels, subspace_mac
 from tiremodal_cli.io.modalfile import read_modal
 from tiremodal_cli.tyre.model import TyreParameters, observation, solve_modes
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import PlotPath, echo_json, json_option, overwrite_option
 
 
-def _labels(t):
-    return [f"{f:.1f} Hz" + (f" n={n} {b}" if n >= 0 else "") for f, n, b in zip(t.frequency_hz, t.n, t.branch)]
-
-
 def _flat(t, channels):
     idx = [t.channel_name.index(c) for c in channels]
     return t.shapes[:, idx].reshape(t.n_modes, -1)
-
-
-def model_bases(params: TyreParameters, t, f_max, n_max=30):
-    """Residue shapes of the model's modes as the test sees them: sensor × point.
-
-    Members of one (n, branch) (cos and sin) form one subspace. Returns (labels, bases).
-    """
-    m = solve_modes(params, n_max=n_max)
-    groups = {}
-    for r in np.flatnonzero(m.freq_hz <= f_max):
-        key = (int(m.n[r]), m.branch[r])
-        rows = []
-        for loc, ang in zip(t.channel_location, t.channel_angle):
-            c_out = observation(m.dofs, loc, ang) @ m.shapes[r] if loc in ("tread", "sidewall", "rim") else 0.0
-            c_in = np.array([observation(m.dofs, "tread", a) @ m.shapes[r] for a in t.point_angle])
-            rows.append(c_out * c_in)
-        groups.setdefault(key, []).append((m.freq_hz[r], np.concatenate(rows)))
-    labels, bases = [], []
-    for (n, b), members in sorted(groups.items(), key=lambda kv: kv[1][0][0]):
-        vecs = [v for _, v in members if np.linalg.norm(v) > 0]
-        if vecs:
-            labels.append(f"model {members[0][0]:.1f} Hz n={n} {b}")
-            bases.append(np.array(vecs))
-    return labels, bases
 
 
 @cli.command("mac", epilog="\b\nExample:\n  tiremodal mac out/gl073a/modal.h5 --analytic 12")
@@ -80,37 +52,12 @@ def mac_cmd(modal_file, other, analytic, model_file, channels, csv_out, plot_out
     unknown = [c for c in chans if c not in a.channel_name]
     if unknown:
         raise DataFormatError(f"channel {unknown[0]!r} is not in {modal_file}; channels: {', '.join(a.channel_name)}")
-    la = _labels(a)
-    if other is not None:
-        b = read_modal(other)
-        if b.point_angle.size != a.point_angle.size or any(c not in b.channel_name for c in chans):
-            raise DataFormatError(f"{other}: geometry differs ({b.point_angle.size} points, channels "
-                                  f"{', '.join(b.channel_name)}); cross-MAC needs the same points and channels")
-        M, lb, kind = mac_matrix(_flat(a, chans), _flat(b, chans)), _labels(b), "cross"
-    elif analytic is not None:
-        if "tread" not in a.channel_location:
-            raise DataFormatError(f"{modal_file}: no tread channel for the analytic shapes")
-        th = a.point_angle
-        if not np.all(np.isfinite(th)):
-            raise DataFormatError(f"{modal_file}: point angles unknown; analytic shapes need them")
-        tread = a.shapes[:, a.channel_location.index("tread")]
-        bases = [np.ones((1, th.size))] + [np.vstack([np.cos(n * th), np.sin(n * th)]) for n in range(1, analytic + 1)]
-        M, lb, kind = subspace_mac(tread, bases), [f"n={n}" for n in range(analytic + 1)], "analytic"
-    elif model_file is not None:
-        params = TyreParameters.from_mapping(load_mapping(model_file).get("params", load_mapping(model_file)))
-        lb, bases = model_bases(params, a, f_max=1.2 * float(a.frequency_hz.max()))
-        M, kind = subspace_mac(np.nan_to_num(a.shapes.reshape(a.n_modes, -1)), bases), "model"
-    else:
-        M, lb, kind = mac_matrix(_flat(a, chans)), la, "auto"
+    la = shape_labels(a)
+    M, lb, kind = _compare(a, modal_file, chans, other=other, analytic=analytic, model_file=model_file)
     if csv_out:
-        buf = io.StringIO()
-        w = csv.writer(buf, lineterminator="\n")
-        w.writerow(["mode"] + lb)
-        for lab, row in zip(la, M):
-            w.writerow([lab] + [f"{v:.4f}" for v in row])
-        write_text_atomic(csv_out, buf.getvalue(), overwrite=overwrite)
+        _write_csv(csv_out, M, la, lb, overwrite)
     if plot_out:
-        from tiremodal_cli.plots import plot_mac, save_figure
+        from tiremodal_cli.plots import plot_mac, save_figure  # matplotlib: loaded only for --plot (start-up time)
 
         ax = plot_mac(M, labels_a=la, labels_b=lb, title={"auto": "AutoMAC", "cross": "cross-MAC",
                                                            "analytic": "MAC with cos nθ", "model": "MAC with the model"}[kind])
@@ -118,11 +65,49 @@ def mac_cmd(modal_file, other, analytic, model_file, channels, csv_out, plot_out
     if as_json:
         echo_json({"kind": kind, "rows": la, "columns": lb, "mac": M.round(6).tolist()})
     else:
-        off = M.copy()
-        if kind == "auto":
-            np.fill_diagonal(off, 0)
-        click.echo(f"{kind} MAC {M.shape[0]} × {M.shape[1]}; largest off-diagonal {off.max():.3f}" if kind == "auto"
-                   else f"{kind} MAC {M.shape[0]} × {M.shape[1]}")
-        for lab, row in zip(la, M):
-            j = int(np.argmax(row))
-            click.echo(f"{lab:>28}  best {lb[j]} ({row[j]:.3f})")
+        _echo(kind, M, la, lb)
+
+
+def _compare(a, modal_file, chans, *, other, analytic, model_file):
+    """The MAC matrix of table ``a`` against what was asked, its column labels and its kind."""
+    if other is not None:
+        b = read_modal(other)
+        if b.point_angle.size != a.point_angle.size or any(c not in b.channel_name for c in chans):
+            raise DataFormatError(f"{other}: geometry differs ({b.point_angle.size} points, channels "
+                                  f"{', '.join(b.channel_name)}); cross-MAC needs the same points and channels")
+        return mac_matrix(_flat(a, chans), _flat(b, chans)), shape_labels(b), "cross"
+    if analytic is not None:
+        if "tread" not in a.channel_location:
+            raise DataFormatError(f"{modal_file}: no tread channel for the analytic shapes")
+        if not np.all(np.isfinite(a.point_angle)):
+            raise DataFormatError(f"{modal_file}: point angles unknown; analytic shapes need them")
+        tread = a.shapes[:, a.channel_location.index("tread")]
+        return (subspace_mac(tread, analytic_bases(a.point_angle, analytic)),
+                [f"n={n}" for n in range(analytic + 1)], "analytic")
+    if model_file is not None:
+        params = TyreParameters.from_mapping(load_mapping(model_file).get("params", load_mapping(model_file)))
+        lb, bases = model_bases(solve_modes(params, n_max=30), a, f_max=1.2 * float(a.frequency_hz.max()),
+                                observe=observation)
+        return subspace_mac(np.nan_to_num(a.shapes.reshape(a.n_modes, -1)), bases), lb, "model"
+    return mac_matrix(_flat(a, chans)), shape_labels(a), "auto"
+
+
+def _write_csv(path, M, la, lb, overwrite):
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["mode"] + lb)
+    for lab, row in zip(la, M):
+        w.writerow([lab] + [f"{v:.4f}" for v in row])
+    write_text_atomic(path, buf.getvalue(), overwrite=overwrite)
+
+
+def _echo(kind, M, la, lb):
+    """The matrix's size and each mode's best match, for people (stdout, without --json)."""
+    off = M.copy()
+    if kind == "auto":
+        np.fill_diagonal(off, 0)
+    click.echo(f"{kind} MAC {M.shape[0]} × {M.shape[1]}; largest off-diagonal {off.max():.3f}" if kind == "auto"
+               else f"{kind} MAC {M.shape[0]} × {M.shape[1]}")
+    for lab, row in zip(la, M):
+        j = int(np.argmax(row))
+        click.echo(f"{lab:>28}  best {lb[j]} ({row[j]:.3f})")
