@@ -25,11 +25,16 @@ from __future__ import annotations
 
 import csv
 import io
+import shutil
+import tempfile
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
+import pyuff
 
-from tiremodal_cli.errors import DataFormatError
+from tiremodal_cli.errors import DataFormatError, ParameterError
+from tiremodal_cli.io.files import check_overwrite, install_dir
 
 __all__ = ["ShapeSet", "shape_set", "uff_datasets", "write_uff", "shapes_csv", "nodes_csv", "RING_BASE",
            "DEFAULT_RADII_M", "FORMATS", "export_folder"]
@@ -153,8 +158,6 @@ def uff_datasets(s: ShapeSet, *, name: str = "tiremodal") -> list[dict]:
     know the first, some newer ones only the second, e.g. SDynPy), 82 (one closed trace
     line per ring) and 55 (one complex shape per mode: analysis type 3, complex eigenvalue,
     with the pole as eigenvalue) as pyuff dataset dictionaries."""
-    import pyuff
-
     nodes = dict(node_nums=s.node.tolist(), def_cs=[0] * s.node.size, disp_cs=[0] * s.node.size,
                  color=[1] * s.node.size, x=s.xyz_m[:, 0].tolist(), y=s.xyz_m[:, 1].tolist(),
                  z=s.xyz_m[:, 2].tolist())
@@ -178,8 +181,6 @@ def uff_datasets(s: ShapeSet, *, name: str = "tiremodal") -> list[dict]:
 def write_uff(path, s: ShapeSet, *, name: str = "tiremodal") -> None:
     """Write :func:`uff_datasets` to one UFF file at ``path`` (which must not exist: the
     caller writes into a temporary name and renames it, see ``files.atomic_path``)."""
-    import pyuff
-
     u = pyuff.UFF(str(path))
     for ds in uff_datasets(s, name=name):
         u.write_sets(ds, mode="add")
@@ -230,13 +231,6 @@ def export_folder(table, outdir, *, fmt: str = "uff", radii_m: dict | None = Non
     -------
     dict : the files written (relative to ``outdir``), the modes, and what was left out.
     """
-    import shutil
-    import tempfile
-    from pathlib import Path
-
-    from tiremodal_cli.errors import ParameterError
-    from tiremodal_cli.io.files import check_overwrite, install_dir
-
     if fmt not in FORMATS:
         raise ParameterError(f"format={fmt!r}; allowed: {', '.join(FORMATS)}")
     outdir = Path(outdir)
@@ -254,6 +248,7 @@ def export_folder(table, outdir, *, fmt: str = "uff", radii_m: dict | None = Non
             (tmp / "shapes.csv").write_text(shapes_csv(s), encoding="utf-8")
             files += ["nodes.csv", "shapes.csv"]
         if gif:
+            # matplotlib only when GIFs are asked for (start-up time; and io does not import plots at load)
             from tiremodal_cli.plots import iter_mode_gifs
 
             (tmp / "modes").mkdir()

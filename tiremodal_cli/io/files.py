@@ -11,6 +11,7 @@ import contextlib
 import hashlib
 import json
 import os
+import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -86,7 +87,7 @@ def path_lock(lock: str | os.PathLike, what: str) -> Iterator[None]:
     sees that its inode is gone and tries again, so two holders never coexist.
     """
     try:
-        import fcntl
+        import fcntl  # here, not at the top: POSIX only (absent on Windows)
     except ImportError:  # not POSIX: no lock
         yield
         return
@@ -169,8 +170,6 @@ def install_dir(tmp: str | os.PathLike, final: str | os.PathLike, *, aside: str 
     """Rename the finished folder ``tmp`` to ``final``. An existing ``final`` is first moved
     into a fresh folder under ``aside`` (default: beside it) and removed after, so at every
     instant ``final`` is the old complete folder, absent, or the new one — never a mix."""
-    import shutil
-
     tmp, final = Path(tmp), Path(final)
     old = None
     if final.exists():
@@ -199,7 +198,7 @@ def sha256_file(path: str | os.PathLike, *, chunk: int = 1 << 20) -> str:
 
 
 def _default(o):
-    import numpy as np
+    import numpy as np  # start-up time: the CLI imports this module, `tiremodal --help` runs without numpy
 
     if isinstance(o, np.integer):
         return int(o)

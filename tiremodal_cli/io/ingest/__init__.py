@@ -106,6 +106,7 @@ def read_source(sources, kind: str = "auto", mapping=None, channel_options=(), *
     channel_options : ``KEY=NAME,LOCATION,ANGLE_DEG`` strings
     attrs : inflation_pressure (Pa), tire, description — recorded in the measurement
     """
+    # a cycle: the readers import this package's helpers (parse_channel, point_angles)
     from tiremodal_cli.io.ingest.csv import read_csv_folder
     from tiremodal_cli.io.ingest.uff import read_uff_time
 
