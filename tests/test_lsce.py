@@ -105,6 +105,24 @@ def test_tyre_modes_found_once_with_n_and_branch(tyre_tables, noise, f_tol, z_to
         assert t.n_confidence[k] > 0.8
 
 
+def test_frequency_uncertainty_carried_from_the_stabilization_equals_the_files(tmp_path, tyre_tables):
+    """σ_f of each mode: carried in memory from its cluster (lsce, run) and rebuilt from the
+    clusters of the modal file (identify, info) are the same numbers, and small against the
+    frequency (a cluster gathers poles within the stabilization's frequency tolerance)."""
+    from tiremodal_cli.io.modalfile import write_modal
+    from tiremodal_cli.modal.table import to_rows
+
+    for noise, (_, table) in tyre_tables.items():
+        assert table.frequency_std_hz is not None
+        write_modal(tmp_path / f"{noise}.h5", table)
+        back = read_modal(tmp_path / f"{noise}.h5")
+        assert back.frequency_std_hz is None
+        carried = [r["frequency_uncertainty_hz"] for r in to_rows(table)]
+        rebuilt = [r["frequency_uncertainty_hz"] for r in to_rows(back)]
+        assert carried == rebuilt
+        assert all(0 <= u < 0.01 * f for u, f in zip(carried, table.frequency_hz))
+
+
 def test_exponential_window_corrected_through_lsce():
     """A window that doubles the apparent damping of the lowest modes; LSCE reports the
     structure's damping within 2 %."""

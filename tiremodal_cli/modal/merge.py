@@ -27,8 +27,8 @@ class GroupMode:
     """A mode as one order group's fit found it.
 
     pole : complex, rad/s ; group : int ; residues : (n_frf,) complex, physical FRFs
-    significance : float (in the physical FRFs) ; scatter_hz : float (std of its cluster's
-    frequencies over the model orders) ; swap_cost : callable(pole) → 2ΔE/2 of its group
+    significance : float (in the physical FRFs) ; frequency_std_hz : float (its cluster's
+    :attr:`~tiremodal_cli.modal.stabilization.Cluster.frequency_std_hz`) ; swap_cost : callable(pole) → 2ΔE/2 of its group
     (:func:`swap_cost`) ; significance_in_group : float
     """
 
@@ -36,7 +36,7 @@ class GroupMode:
     group: int
     residues: np.ndarray
     significance: float
-    scatter_hz: float
+    frequency_std_hz: float
     swap_cost: Callable
     significance_in_group: float
 
@@ -45,7 +45,8 @@ class GroupMode:
 class MergedMode:
     """A physical pole: the dominant group's pole, the groups' shares of its shape summed.
 
-    order_energy : {group: share of the mode's energy}
+    order_energy : {group: share of the mode's energy} ; frequency_std_hz : the dominant
+    group's cluster's scatter (Hz)
     """
 
     pole: complex
@@ -54,6 +55,7 @@ class MergedMode:
     significance: float
     order_energy: dict
     significance_in_group: float
+    frequency_std_hz: float
 
 
 #: probability that one pole seen in two order groups is taken for two modes: the swap test
@@ -144,7 +146,7 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA) -> list
             used[j] = True
         out.append(MergedMode(found[i].pole, found[i].group, phys, found[i].significance,
                               {int(found[j].group): float(energy[j] / tot) for j in groups_seen.values()},
-                              found[i].significance_in_group))
+                              found[i].significance_in_group, found[i].frequency_std_hz))
     out.sort(key=lambda m: abs(m.pole))
     return out
 

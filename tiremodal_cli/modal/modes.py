@@ -93,6 +93,8 @@ class ModalResult:
     band_freq_hz : (n_band,) ndarray
     diagrams : list of (group, Diagram)
     rejected : list of dict                         modes dropped after LSFD, with reasons
+    frequency_std_hz : (n_modes,) ndarray, Hz       scatter of each mode's cluster of poles
+                                                    over the model orders (its uncertainty)
     """
 
     freq_hz: np.ndarray
@@ -108,6 +110,7 @@ class ModalResult:
     diagrams: list = field(default_factory=list)
     rejected: list = field(default_factory=list)
     meta: dict = field(default_factory=dict)
+    frequency_std_hz: np.ndarray | None = None
 
 
 def is_circumferential(point_angle, channel_location) -> bool:
@@ -281,9 +284,9 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
         fit, s, rej, refit = fit_group(data, s)
     if fit is None:
         return d, [], rej, None
-    scatter = {c.representative.s: float(np.std([m.freq_hz for m in c.members])) for c in d.selected()}
+    scatter = {c.representative.s: c.frequency_std_hz for c in d.selected()}
     modes = [GroupMode(s[k], data.group, data.back @ fit.residues[:, k], float(fit.significance[k]),
-                       scatter.get(complex(s[k]), 0.0), swap_cost(data.rows, fit.synthesis, s, k, refit),
+                       scatter[complex(s[k])], swap_cost(data.rows, fit.synthesis, s, k, refit),
                        float(fit.own[k])) for k in range(s.size)]
     return d, modes, rej, data.back @ fit.synthesis
 
@@ -309,7 +312,8 @@ def _result(band: _Band, shape, modes, synth, exp_tau_s, **extra) -> ModalResult
                        mpc=np.array([mpc(m.residues) for m in modes]),
                        significance=np.array([m.significance for m in modes]),
                        group=np.array([m.group for m in modes]), fit_error=err, synthesis=syn,
-                       band_freq_hz=band.freq, **extra)
+                       band_freq_hz=band.freq, frequency_std_hz=np.array([m.frequency_std_hz for m in modes]),
+                       **extra)
 
 
 def confirmed(a: "ModalResult", b: "ModalResult") -> np.ndarray:

@@ -67,6 +67,13 @@ class Cluster:
     def damping_ratio(self) -> float:
         return float(np.median([m.damping_ratio for m in self.members]))
 
+    @property
+    def frequency_std_hz(self) -> float:
+        """The scatter of its poles' frequencies over the model orders (Hz; sample standard
+        deviation, 0 for a single pole): the frequency's uncertainty as the sweep sees it."""
+        f = np.array([m.freq_hz for m in self.members])
+        return float(np.std(f, ddof=1)) if f.size > 1 else 0.0
+
     def mean_shape(self):
         ref = self.members[0].shape
         acc = np.zeros_like(ref)
@@ -81,7 +88,7 @@ class Cluster:
         return {"frequency_hz": self.freq_hz, "damping_ratio": self.damping_ratio,
                 "n_poles": len(self.members), "orders": [m.order for m in self.members],
                 "frequency_spread_pct": float(100 * (f.max() - f.min()) / np.median(f)),
-                "frequency_std_hz": float(np.std(f, ddof=1)) if f.size > 1 else 0.0,
+                "frequency_std_hz": self.frequency_std_hz,
                 "damping_spread_pct": float(100 * (z.max() - z.min()) / max(np.median(z), 1e-12)),
                 "adopted": self.adopted, "reason": self.reason,
                 "representative_order": None if self.representative is None else self.representative.order}

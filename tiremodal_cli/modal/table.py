@@ -54,6 +54,9 @@ class ModalTable:
     rejected: list | None = None
     synthesis: np.ndarray | None = None
     synthesis_freq_hz: np.ndarray | None = None
+    #: each mode's frequency uncertainty (Hz) carried from the stabilization; None when read
+    #: from a modal file (which does not store it: :func:`frequency_uncertainty` rebuilds it)
+    frequency_std_hz: np.ndarray | None = None
 
     @property
     def n_modes(self) -> int:
@@ -83,13 +86,15 @@ def table_from_result(res, classes, *, point_angle, point_index, channel_name, c
         channel_name=tuple(channel_name), channel_location=tuple(channel_location),
         channel_angle=np.asarray(channel_angle, float), fit_error=res.fit_error,
         diagram=np.array(diag, dtype=float).reshape(-1, 5), form=form, meta=res.meta, clusters=clusters,
-        rejected=res.rejected, synthesis=res.synthesis, synthesis_freq_hz=res.band_freq_hz)
+        rejected=res.rejected, synthesis=res.synthesis, synthesis_freq_hz=res.band_freq_hz,
+        frequency_std_hz=res.frequency_std_hz)
 
 
 def frequency_uncertainty(t: ModalTable) -> np.ndarray:
-    """Each mode's frequency scatter (Hz): the standard deviation of its cluster's poles
-    over the model orders of the stabilization diagram (the adopted cluster of its group
-    nearest in frequency, within 1 %). NaN where none matches (an old file)."""
+    """Each mode's frequency scatter (Hz) rebuilt from the table's clusters, for a table read
+    from a file (the modal stage carries it: ``t.frequency_std_hz``): the standard deviation
+    of its cluster's poles over the model orders of the stabilization diagram (the adopted
+    cluster of its group nearest in frequency, within 1 %). NaN where none matches (an old file)."""
     out = np.full(t.n_modes, np.nan)
     adopted = [c for c in (t.clusters or []) if c.get("adopted") and "frequency_std_hz" in c]
     for i in range(t.n_modes):
@@ -114,7 +119,9 @@ def to_rows(t: ModalTable) -> list[dict]:
         what ``identify``, ``diagnose`` and :func:`tiremodal_cli.tyre.fit.modes_from_rows` read.
     """
     rows = []
-    unc = frequency_uncertainty(t)
+    # carried from the stabilization when the table comes from the modal stage; rebuilt from
+    # the clusters when it was read from a file (the same numbers: checked over the suite)
+    unc = frequency_uncertainty(t) if t.frequency_std_hz is None else np.asarray(t.frequency_std_hz, float)
     crowds = (t.meta or {}).get("crowds") or []
     n_top = t.point_angle.size // 2
     for i in range(t.n_modes):
