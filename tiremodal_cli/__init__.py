@@ -59,9 +59,9 @@ _API = {
     "modes_from_rows": ("tyre.fit", "modes_from_rows"),
     "predict_table": ("tyre.fit", "predict_table"),
     # the diagnosis
-    "DiagnoseOptions": ("diagnose.loop", "DiagnoseOptions"),
-    "diagnose_modes": ("diagnose.loop", "diagnose"),
-    "diagnosis_report": ("diagnose.loop", "report"),
+    "DiagnoseOptions": ("diagnose", "DiagnoseOptions"),
+    "diagnose_modes": ("diagnose", "diagnose"),
+    "diagnosis_report": ("diagnose", "report"),
     # the whole loop, pages and shapes out
     "RunOptions": ("workflow.pipeline", "RunOptions"),
     "run": ("workflow.pipeline", "run"),

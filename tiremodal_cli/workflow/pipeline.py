@@ -222,20 +222,20 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     # and handed to it (identify.json, diagnosis.json, run.json and the report hold it)
     dopt = DiagnoseOptions(seed=opt.seed, noise_floor_pct=opt.noise_floor_pct, max_effects=opt.max_effects,
                            rim=rim_state(rim_how))
-    modes, skipped, _ = usable_modes(rows, dopt, source="modal.h5", on_empty=lambda: no_usable_modes(
+    measured = usable_modes(rows, dopt, source="modal.h5", on_empty=lambda: no_usable_modes(
         f"{source['path']} (its modal table)", rows, modes_from_rows(rows)[1]))
-    base = base_fit(modes, params, dopt)
+    base = base_fit(measured.modes, params, dopt)
     res = base.fit
     # predictions reach the highest measured order and two beyond ("the higher orders")
     n_pred = max([opt.predict_n] + [m["n"] + 2 for m in res.modes])
-    ident = fit_report(res, skipped, predict_table(res, n_pred, measured=res.modes))
+    ident = fit_report(res, list(measured.skipped), predict_table(res, n_pred, measured=res.modes))
     ident["set_aside"] = [a.to_dict() for a in base.set_aside]
     ident["outlier_rule"] = {"z_crit": base.z_crit, "scale": base.scale, "alpha": base.alpha,
                              "rule": "|z − median z| / max(1, 1.4826 MAD z) > Φ⁻¹(1 − α/2N), one mode at a time"}
     ident["model_comparison"] = _model_comparison(list(base.kept), params, res)
     write_text_atomic(outdir / "identify.json", _json(ident), overwrite=True)
     say("diagnose")
-    diag = diagnose(rows, params, dopt, n_points=int(table.point_angle.size), base=base)
+    diag = diagnose(measured, params, dopt, n_points=int(table.point_angle.size), base=base)
     rep = report(diag, n_pred)
     write_text_atomic(outdir / "diagnosis.json", _json(rep), overwrite=True)
     write_text_atomic(outdir / "sensitivity.json", _json(_sensitivity(diag.augmented, n_pred)), overwrite=True)
