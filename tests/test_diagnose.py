@@ -14,7 +14,9 @@ from tiremodal_cli.tyre.effects import resolve_effects
 from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
 from tiremodal_cli.io.measurement import write_measurement
 from tiremodal_cli.io.modalfile import to_rows
-from tiremodal_cli.tyre.model import TyreParameters, branch_frequencies, point_mass_pairs, solve_modes
+from tiremodal_cli.tyre.frequencies import branch_frequencies, point_mass_pairs
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.solve import solve_modes
 from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
 from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 

@@ -26,8 +26,8 @@ import scipy.optimize
 
 from tiremodal_cli.tyre.effects import get_effect
 from tiremodal_cli.errors import DataFormatError, ParameterError
-from tiremodal_cli.tyre.model import TyreParameters, closed_form_hz, solve_modes
-
+from tiremodal_cli.tyre.model import TyreParameters, closed_form_hz
+from tiremodal_cli.tyre.solve import solve_modes
 __all__ = ["MeasuredMode", "FitOptions", "FitResult", "DEFAULT_BOUNDS", "model_frequencies", "fit",
            "modes_from_rows", "predict_table", "fit_report", "PAPER_GA"]
 
@@ -255,8 +255,7 @@ def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=Non
     coupling effects the assembled problem of :func:`tiremodal_cli.tyre.model.solve_modes`.
     """
     from tiremodal_cli.tyre.effects import resolve_effects
-    from tiremodal_cli.tyre.model import branch_frequencies
-
+    from tiremodal_cli.tyre.frequencies import branch_frequencies
     ns = np.asarray(ns, dtype=int)
     br = np.asarray(branches)
     eff = resolve_effects(effects) if (effects is None or isinstance(effects, dict)) else tuple(effects)
@@ -283,8 +282,7 @@ def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=Non
     mem = [None] * ns.size if members is None else list(members)
     coupling = [(e, v) for e, v in eff if e.couple is not None]
     if len(coupling) == 1 and coupling[0][0].extra.get("point_mass") and not cavity.any():
-        from tiremodal_cli.tyre.model import point_mass_pairs
-
+        from tiremodal_cli.tyre.frequencies import point_mass_pairs
         pairs = point_mass_pairs(p, coupling[0][1][coupling[0][0].extra["point_mass"]], max(2, int(ns.max())), eff)
         lookup = lambda n, b: np.array(pairs.get((n, b), ()))  # noqa: E731
     else:
@@ -541,8 +539,7 @@ class _Evaluator:
         self.evaluations = 0
 
     def frequencies(self, logX) -> np.ndarray:
-        from tiremodal_cli.tyre.model import ParamStack, stacked_branch_frequencies, stacked_point_mass_pairs
-
+        from tiremodal_cli.tyre.stacked import ParamStack, stacked_branch_frequencies, stacked_point_mass_pairs
         logX = np.asarray(logX, dtype=float)
         S = logX.shape[1]
         self.calls += 1
