@@ -9,7 +9,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-from tiremodal_cli.tyre.fit import FitOptions, MeasuredMode, fit, model_frequencies
+from tiremodal_cli.tyre.fit import fit
+
+from tiremodal_cli.tyre.fit_types import FitOptions
+
+from tiremodal_cli.tyre.frequencies import model_frequencies
+
+from tiremodal_cli.tyre.measured import MeasuredMode
 from tiremodal_cli.tyre.model import TyreParameters
 from tiremodal_cli.tyre.ring import RingParameters, ring_modes
 from tiremodal_cli.tyre.robust import robust_fit, with_sigma, z_critical

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 
 from tiremodal_cli.diagnose.refit import refit_robust
-from tiremodal_cli.tyre.fit import model_frequencies
+from tiremodal_cli.tyre.frequencies import model_frequencies
 from tiremodal_cli.tyre.robust import RobustFit
 
 __all__ = ["recheck"]

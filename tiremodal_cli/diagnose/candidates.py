@@ -9,7 +9,7 @@ from tiremodal_cli.diagnose.options import PARAMETER_CANDIDATES, fit_options, se
 from tiremodal_cli.diagnose.refit import Scoring, Trial, aligned, judge, refit_on, testimony
 from tiremodal_cli.diagnose.result import Candidate, no_evidence
 from tiremodal_cli.tyre.effects import get_effect
-from tiremodal_cli.tyre.fit import DEFAULT_BOUNDS
+from tiremodal_cli.tyre.fit_types import DEFAULT_BOUNDS
 from tiremodal_cli.tyre.robust import RobustFit, robust_fit
 
 __all__ = ["try_candidate", "adopt_reason", "choose"]

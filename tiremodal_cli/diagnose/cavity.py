@@ -10,7 +10,8 @@ from tiremodal_cli.diagnose.options import cavity_band_hz, fit_options, search_s
 from tiremodal_cli.diagnose.refit import Scoring, Trial, aligned, judge, refit_on, restrict, testimony
 from tiremodal_cli.diagnose.result import Candidate, no_evidence
 from tiremodal_cli.diagnose.statistics import weighted_rss
-from tiremodal_cli.tyre.fit import MeasuredMode, model_frequencies
+from tiremodal_cli.tyre.frequencies import model_frequencies
+from tiremodal_cli.tyre.measured import MeasuredMode
 from tiremodal_cli.tyre.robust import RobustFit, robust_fit
 
 __all__ = ["CavitySpec", "try_cavity"]

@@ -41,7 +41,7 @@ from tiremodal_cli.diagnose.result import Candidate, Diagnosis, report, verdict_
 from tiremodal_cli.diagnose.statistics import residual_analysis
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.tyre.effects import EFFECTS
-from tiremodal_cli.tyre.fit import MeasuredMode, modes_from_rows
+from tiremodal_cli.tyre.measured import MeasuredMode, modes_from_rows
 from tiremodal_cli.tyre.model import TyreParameters
 from tiremodal_cli.tyre.robust import RobustFit, robust_fit, with_sigma
 

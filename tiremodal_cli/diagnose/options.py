@@ -8,7 +8,7 @@ import numpy as np
 
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.tyre.effects import EFFECTS
-from tiremodal_cli.tyre.fit import FitOptions, FitResult
+from tiremodal_cli.tyre.fit_types import FitOptions, FitResult
 from tiremodal_cli.tyre.model import TyreParameters
 
 __all__ = ["PARAMETER_CANDIDATES", "DiagnoseOptions", "cavity_band_hz", "fit_options", "search_start"]
@@ -31,7 +31,7 @@ class DiagnoseOptions:
     seed, population, generations, tol : the evolutionary search of every fit
     search : "local" (default): the base fit by the evolutionary search, every refit on
         top of a fitted model by least squares from it, safeguarded by a short evolutionary search
-        (:class:`tiremodal_cli.tyre.fit.FitOptions`); "global": the full search every time
+        (:class:`tiremodal_cli.tyre.fit_types.FitOptions`); "global": the full search every time
     speed_of_sound : m/s, for the cavity band c / (2π r_c)
     cavity_radius : (lo, hi) fractions of the tread radius R the cavity's mean radius
         may take (default 0.4 … 1.0)

@@ -9,7 +9,8 @@ import numpy as np
 
 from tiremodal_cli.diagnose.options import DiagnoseOptions, fit_options, search_start
 from tiremodal_cli.diagnose.statistics import aicc, f_test_p, weighted_rss
-from tiremodal_cli.tyre.fit import FitResult, fit
+from tiremodal_cli.tyre.fit import fit
+from tiremodal_cli.tyre.fit_types import FitResult
 from tiremodal_cli.tyre.robust import RobustFit, robust_fit
 
 __all__ = ["Trial", "Scoring", "judge", "testimony", "aligned", "refit_on", "refit_robust", "restrict"]

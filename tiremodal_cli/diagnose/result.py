@@ -7,7 +7,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tiremodal_cli.diagnose.options import DiagnoseOptions
-from tiremodal_cli.tyre.fit import FitResult, predict_table
+from tiremodal_cli.tyre.fit_types import FitResult
+from tiremodal_cli.tyre.predict import predict_table
 from tiremodal_cli.tyre.robust import RobustFit
 
 __all__ = ["Candidate", "no_evidence", "Diagnosis", "verdict_text", "predictions", "mode_table", "report"]

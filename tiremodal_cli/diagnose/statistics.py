@@ -14,7 +14,7 @@ import numpy as np
 import scipy.special
 
 from tiremodal_cli.diagnose.options import DiagnoseOptions
-from tiremodal_cli.tyre.fit import FitResult
+from tiremodal_cli.tyre.fit_types import FitResult
 from tiremodal_cli.tyre.robust import RobustFit
 
 __all__ = ["sigma_rel", "residual_analysis", "aicc", "weighted_rss", "f_test_p"]

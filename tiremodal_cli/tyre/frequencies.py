@@ -9,8 +9,11 @@ from __future__ import annotations
 import numpy as np
 
 from tiremodal_cli.errors import ParameterError
-from tiremodal_cli.tyre.model import TyreParameters, branch_label, fixed_point_hz, generalised_length, pair_eigenvalues, solve_block, stacked_blocks
-__all__ = ['branch_frequencies', 'point_mass_pairs']
+from tiremodal_cli.tyre.effects import resolve_effects
+from tiremodal_cli.tyre.model import TyreParameters, closed_form_hz, branch_label, fixed_point_hz, generalised_length, pair_eigenvalues, solve_block, stacked_blocks
+from tiremodal_cli.tyre.solve import solve_modes
+
+__all__ = ['branch_frequencies', 'point_mass_pairs', 'model_frequencies']
 
 
 def branch_frequencies(ns, p: TyreParameters, effects=()) -> np.ndarray:
@@ -120,4 +123,76 @@ def point_mass_pairs(p: TyreParameters, m_a: float, n_max: int, effects=()) -> d
         upper = np.sqrt(lam[r]) / (2 * np.pi)
         low = np.sqrt(lower[r]) / (2 * np.pi) if r in lower else upper
         out.setdefault((n, br), (low, low if n == 0 else upper))
+    return out
+
+
+def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=None, meas_hz=None) -> np.ndarray:
+    """Model frequencies (Hz) of the given (n, branch) pairs.
+
+    Parameters
+    ----------
+    p : TyreParameters
+    ns : (k,) array of int
+    branches : (k,) sequence of {"same", "opposite", "cavity"}
+    effects : mapping ``{name: {param: value}}`` or resolved effects, optional
+    members : (k,) sequence of {None, "lower", "upper"}, optional
+        Which member of a cos/sin pair a measured mode is. Only a coupling effect (a
+        lumped mass) splits the pairs; then "lower"/"upper" take that member and None
+        the member nearer ``meas_hz`` (a pair of which one member was found), or the
+        pair's mean without it. Without a coupling both members are one frequency.
+    meas_hz : (k,) array, optional — the measured frequencies (for None members)
+
+    Returns
+    -------
+    freq_hz : (k,) ndarray — NaN where the model has no such mode.
+
+    The seed model uses the closed form (and the 3 × 3 problem for n = 1 with a rim);
+    block effects the stacked solver :func:`tiremodal_cli.tyre.model.branch_frequencies`;
+    coupling effects the assembled problem of :func:`tiremodal_cli.tyre.model.solve_modes`.
+    """
+    ns = np.asarray(ns, dtype=int)
+    br = np.asarray(branches)
+    eff = resolve_effects(effects) if (effects is None or isinstance(effects, dict)) else tuple(effects)
+    out = np.full(ns.size, np.nan)
+    cavity = br == "cavity"
+    if not eff:
+        cf = closed_form_hz(ns, p)
+        col = (br == "opposite").astype(int)
+        out = np.where(cavity, np.nan, cf[np.arange(ns.size), col])
+        if p.m_w is not None and np.any(ns == 1):
+            m = solve_modes(p, n_max=1)
+            for i in np.flatnonzero((ns == 1) & ~cavity):
+                sel = (m.n == 1) & (np.array(m.branch) == br[i]) & (np.array(m.harmonic) == "cos")
+                out[i] = m.freq_hz[sel][0] if sel.any() else np.nan
+        return out
+    if not any(e.couple is not None for e, _ in eff):
+        bf = branch_frequencies(ns, p, eff)
+        out = np.where(br == "opposite", bf[:, 1], bf[:, 0])
+        if cavity.any():
+            m = solve_modes(p, n_max=1, effects=eff)
+            fc = m.freq_hz[np.array(m.branch) == "cavity"]
+            out[cavity] = fc.min() if fc.size else np.nan
+        return out
+    mem = [None] * ns.size if members is None else list(members)
+    coupling = [(e, v) for e, v in eff if e.couple is not None]
+    if len(coupling) == 1 and coupling[0][0].extra.get("point_mass") and not cavity.any():
+        pairs = point_mass_pairs(p, coupling[0][1][coupling[0][0].extra["point_mass"]], max(2, int(ns.max())), eff)
+        lookup = lambda n, b: np.array(pairs.get((n, b), ()))  # noqa: E731
+    else:
+        m = solve_modes(p, n_max=max(2, int(ns.max())), effects=eff)
+        mb = np.array(m.branch)
+        lookup = lambda n, b: np.sort(m.freq_hz[(m.n == n) & (mb == b)])  # noqa: E731
+    for i, (n, b) in enumerate(zip(ns, br)):
+        f = lookup(n, b)
+        if f.size == 0:
+            continue
+        pair = f[:2] if b != "cavity" else f[:1]
+        if mem[i] == "lower":
+            out[i] = pair[0]
+        elif mem[i] == "upper":
+            out[i] = pair[-1]
+        elif meas_hz is not None:  # one member found: the nearer one
+            out[i] = pair[np.argmin(np.abs(pair - meas_hz[i]))]
+        else:
+            out[i] = pair.mean()
     return out

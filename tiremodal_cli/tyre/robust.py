@@ -42,7 +42,13 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.special
 
-from tiremodal_cli.tyre.fit import FitOptions, FitResult, MeasuredMode, fit, model_frequencies
+from tiremodal_cli.tyre.fit import fit
+
+from tiremodal_cli.tyre.fit_types import FitOptions, FitResult
+
+from tiremodal_cli.tyre.frequencies import model_frequencies
+
+from tiremodal_cli.tyre.measured import MeasuredMode
 from tiremodal_cli.tyre.model import TyreParameters
 
 __all__ = ["SetAside", "RobustFit", "z_critical", "with_sigma", "robust_fit", "normalised_errors"]

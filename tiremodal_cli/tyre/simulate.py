@@ -20,7 +20,7 @@ from tiremodal_cli import __version__
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.io.measurement import Measurement
 from tiremodal_cli.tyre.model import TyreParameters, paper_damping
-from tiremodal_cli.tyre.solve import ModalModel, frf, solve_modes
+from tiremodal_cli.tyre.solve import ModalModel, frf, observation, solve_modes
 from tiremodal_cli.tyre.ring import RingModes, RingParameters, elements_for, ring_frf, ring_modes, ring_observation
 
 __all__ = ["Channel", "Faults", "SimulationConfig", "Simulation", "simulate", "half_sine_spectrum",
@@ -236,7 +236,6 @@ def _paper_source(cfg, freq, angles):
     locs = [c.location for c in cfg.channels]
     c_ang = np.array([c.angle_rad for c in cfg.channels])
     H = frf(modes, freq, zeta, locs, c_ang, angles, form="accelerance")
-    from tiremodal_cli.tyre.solve import observation
     listed = []
     for r in np.flatnonzero(modes.freq_hz < 0.5 * cfg.sample_rate):
         shape = {}

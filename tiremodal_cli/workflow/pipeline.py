@@ -25,7 +25,8 @@ from tiremodal_cli.errors import DataFormatError, ParameterError
 from tiremodal_cli.io.files import _UMASK, dumps, install_dir, path_lock, refuse_input_as_output, sha256_file, write_text_atomic
 from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
 from tiremodal_cli.io.frffile import is_uff, read_frf_uff, write_frf
-from tiremodal_cli.tyre.fit import fit_report, modes_from_rows, predict_table
+from tiremodal_cli.tyre.measured import modes_from_rows
+from tiremodal_cli.tyre.predict import fit_report, predict_table
 from tiremodal_cli.io.modalfile import no_usable_modes
 from tiremodal_cli.io.measurement import open_measurement
 from tiremodal_cli.io.modalfile import to_csv, to_rows, write_modal

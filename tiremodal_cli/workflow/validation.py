@@ -364,7 +364,7 @@ def detectable(case: "Case", groups, params: TyreParameters) -> dict:
     if case.physics == "none":
         return {"detectable": False, "rms_pct": 0.0, "p_value": 1.0, "set_aside": 0}
     from tiremodal_cli.diagnose.loop import DiagnoseOptions, base_fit, residual_analysis
-    from tiremodal_cli.tyre.fit import MeasuredMode
+    from tiremodal_cli.tyre.measured import MeasuredMode
     from tiremodal_cli.tyre.robust import with_sigma
 
     modes = []
