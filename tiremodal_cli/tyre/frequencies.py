@@ -173,9 +173,17 @@ def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=Non
             fc = m.freq_hz[np.array(m.branch) == "cavity"]
             out[cavity] = fc.min() if fc.size else np.nan
         return out
+    return _coupled_frequencies(p, ns, br, eff, members, meas_hz)
+
+
+def _coupled_frequencies(p, ns, br, eff, members, meas_hz) -> np.ndarray:
+    """:func:`model_frequencies` with a coupling effect: each measured mode the member of its
+    (n, branch) pair that ``members`` names (or the one nearer the measured frequency, or the
+    pair's mean)."""
+    out = np.full(ns.size, np.nan)
     mem = [None] * ns.size if members is None else list(members)
     coupling = [(e, v) for e, v in eff if e.couple is not None]
-    if len(coupling) == 1 and coupling[0][0].extra.get("point_mass") and not cavity.any():
+    if len(coupling) == 1 and coupling[0][0].extra.get("point_mass") and not (br == "cavity").any():
         pairs = point_mass_pairs(p, coupling[0][1][coupling[0][0].extra["point_mass"]], max(2, int(ns.max())), eff)
         lookup = lambda n, b: np.array(pairs.get((n, b), ()))  # noqa: E731
     else:

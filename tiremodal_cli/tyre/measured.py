@@ -39,9 +39,28 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
     Returns the modes and the rows left out with their reasons (each with its ``row``
     number, ``frequency_hz``, and ``n``/``branch`` where the row has them).
     """
+    kept, skipped = _parse_rows(rows, min_confidence, min_mpc)
+    modes = []
+    for (n, b), vals in sorted(kept.items(), key=lambda kv: np.mean([v[0] for v in kv[1]])):
+        if len(vals) > 1:
+            # members of a split pair lie close together; a far "duplicate" is a misread
+            # order (an alias, a spurious pole): keep the strongest, skip the rest
+            vals.sort(key=lambda v: -v[3])
+            far = [v for v in vals[1:] if abs(v[0] / vals[0][0] - 1) > 0.05]
+            for v in far:
+                skipped.append({"row": v[4], "frequency_hz": v[0], "n": n, "branch": b,
+                                "reason": f"n={n} {b} already at {vals[0][0]:.2f} Hz (not a split pair: > 5 % apart)"})
+            vals = [v for v in vals if v not in far]
+        modes.extend(_modes_of(n, b, vals, split_pairs, source))
+    return modes, skipped
+
+
+def _parse_rows(rows, min_confidence, min_mpc):
+    """The usable rows by (n, branch), each as (f, ζ, σ_f, significance, row number,
+    aliased), and the rows left out with their reasons."""
     kept, skipped = {}, []
     for i, r in enumerate(rows):
-        def get(k):
+        def get(k, r=r):
             v = r.get(k)
             return None if v is None or (isinstance(v, str) and v.strip() == "") else v
         try:
@@ -69,29 +88,21 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
         al = str(get("n_aliased") or "").strip().lower() in ("true", "1")
         kept.setdefault((n, b), []).append((f, None if z is None else float(z), None if u is None else float(u),
                                             1.0 if sig is None else float(sig), i + 1, al))
-    modes = []
-    for (n, b), vals in sorted(kept.items(), key=lambda kv: np.mean([v[0] for v in kv[1]])):
-        if len(vals) > 1:
-            # members of a split pair lie close together; a far "duplicate" is a misread
-            # order (an alias, a spurious pole): keep the strongest, skip the rest
-            vals.sort(key=lambda v: -v[3])
-            far = [v for v in vals[1:] if abs(v[0] / vals[0][0] - 1) > 0.05]
-            for v in far:
-                skipped.append({"row": v[4], "frequency_hz": v[0], "n": n, "branch": b,
-                                "reason": f"n={n} {b} already at {vals[0][0]:.2f} Hz (not a split pair: > 5 % apart)"})
-            vals = [v for v in vals if v not in far]
-        if split_pairs == "members" and len(vals) == 2:
-            for v, member in zip(sorted(vals, key=lambda v: v[0]), ("lower", "upper")):
-                modes.append(MeasuredMode(n, b, v[0], v[1], v[2], source=f"{source} ({member} member of a split pair)",
-                                          member=member, aliased=v[5]))
-            continue
-        f = float(np.mean([v[0] for v in vals]))
-        zs = [v[1] for v in vals if v[1] is not None]
-        us = [v[2] for v in vals if v[2] is not None]
-        modes.append(MeasuredMode(n, b, f, float(np.mean(zs)) if zs else None, float(np.mean(us)) if us else None,
-                                  source=source if len(vals) == 1 else f"{source} (mean of a split pair)",
-                                  aliased=any(v[5] for v in vals)))
-    return modes, skipped
+    return kept, skipped
+
+
+def _modes_of(n, b, vals, split_pairs, source) -> list[MeasuredMode]:
+    """The measured mode(s) of one (n, branch): a split pair as two members or its mean."""
+    if split_pairs == "members" and len(vals) == 2:
+        return [MeasuredMode(n, b, v[0], v[1], v[2], source=f"{source} ({member} member of a split pair)",
+                             member=member, aliased=v[5])
+                for v, member in zip(sorted(vals, key=lambda v: v[0]), ("lower", "upper"))]
+    f = float(np.mean([v[0] for v in vals]))
+    zs = [v[1] for v in vals if v[1] is not None]
+    us = [v[2] for v in vals if v[2] is not None]
+    return [MeasuredMode(n, b, f, float(np.mean(zs)) if zs else None, float(np.mean(us)) if us else None,
+                         source=source if len(vals) == 1 else f"{source} (mean of a split pair)",
+                         aliased=any(v[5] for v in vals))]
 
 
 #: a row explaining less of the physical response than lsce's own cut-off

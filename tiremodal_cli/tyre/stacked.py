@@ -210,6 +210,36 @@ def stacked_point_mass_pairs(n_max: int, p: ParamStack, m_a, effects=()) -> np.n
     pairs : (S, n_max + 1, 2, 2) ndarray, Hz — [s, n, branch (0 same, 1 opposite),
         (lower, upper)]; NaN where (n, branch) has no mode; n = 0 lower = upper
     """
+    lam, c2, lab_n, lab_b = _stacked_spectrum(n_max, p, effects)
+    S, R = lam.shape
+    active = c2 > 1e-14 * c2.max(axis=1, keepdims=True)
+    # the active modes first (ascending), the rest (no pole) pushed to +inf with no weight
+    la = np.where(active, lam, np.inf)
+    aord = np.argsort(la, axis=1, kind="stable")
+    la, ca = np.take_along_axis(la, aord, 1), np.take_along_axis(np.where(active, c2, 0.0), aord, 1)
+    ok = np.arange(R)[None, :] < active.sum(axis=1)[:, None]
+    roots, dom_act = _secular_roots(la, ca, ok, np.broadcast_to(np.asarray(m_a, dtype=float), (S,))[:, None])
+    dom = np.take_along_axis(aord, dom_act, 1)  # index in λ order
+    dist = np.where((dom[:, :, None] == np.arange(R)[None, None, :]) & ok[:, :, None],
+                    np.abs(roots[:, :, None] - lam[:, None, :]), np.inf)  # (S, root, mode)
+    best = np.argmin(dist, axis=1)
+    has = np.isfinite(np.min(dist, axis=1))
+    lower = np.where(has, np.take_along_axis(roots, best, 1), lam)
+    upper_hz, lower_hz = np.sqrt(lam) / (2 * np.pi), np.sqrt(lower) / (2 * np.pi)
+    out = np.full((S, n_max + 1, 2, 2), np.nan)
+    rows = np.arange(S)
+    for r in range(R - 1, -1, -1):  # descending, so the lowest mode of each (n, branch) is written last
+        n_r, b_r = lab_n[:, r], lab_b[:, r]
+        sel = b_r < 2
+        out[rows[sel], n_r[sel], b_r[sel], 0] = lower_hz[sel, r]
+        out[rows[sel], n_r[sel], b_r[sel], 1] = np.where(n_r[sel] == 0, lower_hz[sel, r], upper_hz[sel, r])
+    return out
+
+
+def _stacked_spectrum(n_max: int, p: ParamStack, effects):
+    """Every mode of orders 0 … n_max of each member without the mass, in ascending order:
+    (S, R) eigenvalues ω², squared tread shape at the mass per generalised length, order n
+    and branch label."""
     eff = tuple(e for e in effects if e[0].couple is None)
     freq_dep = any(e.frequency_dependent for e, _ in eff)
     S = p.k_r1.size
@@ -231,19 +261,16 @@ def stacked_point_mass_pairs(n_max: int, p: ParamStack, m_a, effects=()) -> np.n
     lam, c2 = np.concatenate(lam, axis=1), np.concatenate(c2, axis=1)
     lab_n, lab_b = np.concatenate(lab_n, axis=1), np.concatenate(lab_b, axis=1)
     order = np.argsort(lam, axis=1, kind="stable")
-    lam, c2 = np.take_along_axis(lam, order, 1), np.take_along_axis(c2, order, 1)
-    lab_n, lab_b = np.take_along_axis(lab_n, order, 1), np.take_along_axis(lab_b, order, 1)
-    R = lam.shape[1]
-    active = c2 > 1e-14 * c2.max(axis=1, keepdims=True)
-    # the active modes first (ascending), the rest (no pole) pushed to +inf with no weight
-    la = np.where(active, lam, np.inf)
-    aord = np.argsort(la, axis=1, kind="stable")
-    la, ca = np.take_along_axis(la, aord, 1), np.take_along_axis(np.where(active, c2, 0.0), aord, 1)
-    n_act = active.sum(axis=1)
-    ok = np.arange(R)[None, :] < n_act[:, None]
+    return (np.take_along_axis(lam, order, 1), np.take_along_axis(c2, order, 1),
+            np.take_along_axis(lab_n, order, 1), np.take_along_axis(lab_b, order, 1))
+
+
+def _secular_roots(la, ca, ok, ma):
+    """Roots of λ m_a Σ c²/(λ_r − λ) = 1 below each active pole (valid where ``ok``), and
+    for each root the index (among the active-sorted modes) of the mode it is most of."""
+    S = la.shape[0]
     lo = np.concatenate([np.zeros((S, 1)), la[:, :-1]], axis=1)
     a, b = np.where(ok, lo, 0.0), np.where(ok, la, 1.0)
-    ma = np.broadcast_to(np.asarray(m_a, dtype=float), (S,))[:, None]
     lafin = np.where(np.isfinite(la), la, 0.0)
     # bisection as point_mass_pairs (Newton steps crawl here: the lower member's root sits
     # next to its pole), stopped once every bracket is down to rounding
@@ -256,19 +283,5 @@ def stacked_point_mass_pairs(n_max: int, p: ParamStack, m_a, effects=()) -> np.n
                 break
         roots = 0.5 * (a + b)  # (S, R): root k of member s (valid where ok)
         share = ca[:, None, :] / (lafin[:, None, :] - roots[:, :, None]) ** 2
-        dom_act = np.argmax(np.nan_to_num(share, nan=np.inf), axis=2)  # index among the active-sorted modes
-    dom = np.take_along_axis(aord, dom_act, 1)  # index in λ order
-    dist = np.where((dom[:, :, None] == np.arange(R)[None, None, :]) & ok[:, :, None],
-                    np.abs(roots[:, :, None] - lam[:, None, :]), np.inf)  # (S, root, mode)
-    best = np.argmin(dist, axis=1)
-    has = np.isfinite(np.min(dist, axis=1))
-    lower = np.where(has, np.take_along_axis(roots, best, 1), lam)
-    upper_hz, lower_hz = np.sqrt(lam) / (2 * np.pi), np.sqrt(lower) / (2 * np.pi)
-    out = np.full((S, n_max + 1, 2, 2), np.nan)
-    rows = np.arange(S)
-    for r in range(R - 1, -1, -1):  # descending, so the lowest mode of each (n, branch) is written last
-        n_r, b_r = lab_n[:, r], lab_b[:, r]
-        sel = b_r < 2
-        out[rows[sel], n_r[sel], b_r[sel], 0] = lower_hz[sel, r]
-        out[rows[sel], n_r[sel], b_r[sel], 1] = np.where(n_r[sel] == 0, lower_hz[sel, r], upper_hz[sel, r])
-    return out
+        dom_act = np.argmax(np.nan_to_num(share, nan=np.inf), axis=2)
+    return roots, dom_act
