@@ -21,7 +21,8 @@ from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.io.measurement import Measurement
 from tiremodal_cli.tyre.model import TyreParameters, paper_damping
 from tiremodal_cli.tyre.solve import ModalModel, frf, observation, solve_modes
-from tiremodal_cli.tyre.ring import RingModes, RingParameters, elements_for, ring_frf, ring_modes, ring_observation
+from tiremodal_cli.tyre.ring import RingModes, elements_for, ring_frf, ring_modes, ring_observation
+from tiremodal_cli.tyre.ring_parameters import RingParameters
 
 __all__ = ["Channel", "Faults", "SimulationConfig", "Simulation", "simulate", "half_sine_spectrum",
            "DEFAULT_CHANNELS", "CAMPAIGN_CONFIG", "simulate_campaign", "MODELS", "RING_DAMPING"]

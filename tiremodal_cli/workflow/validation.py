@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from tiremodal_cli.tyre.model import TyreParameters
-from tiremodal_cli.tyre.ring import RING_VARIANTS, RingParameters
+from tiremodal_cli.tyre.ring_parameters import RING_VARIANTS, RingParameters
 from tiremodal_cli.tyre.simulate import Faults, SimulationConfig, half_sine_spectrum, simulate
 
 __all__ = ["Case", "FACTORS", "REFERENCE", "PHYSICS", "PAIRS", "EXPECTED_DIAGNOSIS", "matrix", "config_for",
