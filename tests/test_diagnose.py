@@ -174,7 +174,7 @@ def test_run_writes_every_stage_and_a_manifest(tmp_path):
         assert (tmp_path / "out" / name).is_file()
     assert meas.read_bytes() == before  # input never modified
     assert not list((tmp_path / "out").glob("*.part"))
-    from tiremodal_cli.workflow.pipeline import is_complete
+    from tiremodal_cli.workflow.manifest import is_complete
 
     assert is_complete(tmp_path / "out", meas)
     res = run_cli(["run", meas, "-o", tmp_path / "out"])

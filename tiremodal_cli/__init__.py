@@ -54,18 +54,18 @@ _API = {
     "mac_matrix": ("modal.mac", "mac_matrix"),
     # the tyre model and its fit
     "TyreParameters": ("tyre.model", "TyreParameters"),
-    "FitOptions": ("tyre.fit", "FitOptions"),
+    "FitOptions": ("tyre.fit_types", "FitOptions"),
     "fit": ("tyre.fit", "fit"),
-    "modes_from_rows": ("tyre.fit", "modes_from_rows"),
-    "predict_table": ("tyre.fit", "predict_table"),
+    "modes_from_rows": ("tyre.measured", "modes_from_rows"),
+    "predict_table": ("tyre.predict", "predict_table"),
     # the diagnosis
     "DiagnoseOptions": ("diagnose", "DiagnoseOptions"),
     "diagnose_modes": ("diagnose", "diagnose"),
     "diagnosis_report": ("diagnose", "report"),
     # the whole loop, pages and shapes out
-    "RunOptions": ("workflow.pipeline", "RunOptions"),
+    "RunOptions": ("workflow.run_options", "RunOptions"),
     "run": ("workflow.pipeline", "run"),
-    "run_folder": ("workflow.pipeline", "run_folder"),
+    "run_folder": ("workflow.run_folder", "run_folder"),
     "run_batch": ("workflow.batch", "run_batch"),
     "write_report": ("workflow.report", "report"),
     "shape_set": ("io.export", "shape_set"),

@@ -391,7 +391,7 @@ def run_case(case: Case, workdir) -> dict:
     (type and message), never raised.
     """
     from tiremodal_cli.io.measurement import write_measurement
-    from tiremodal_cli.workflow.pipeline import RunOptions
+    from tiremodal_cli.workflow.run_options import RunOptions
     from tiremodal_cli.workflow.pipeline import run as run_pipeline
 
     workdir = Path(workdir)
