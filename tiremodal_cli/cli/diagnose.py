@@ -77,8 +77,7 @@ def diagnose_cmd(modes_file, params_file, param_items, free, candidates, noise_f
                           candidates=tuple(x.strip() for x in candidates.split(",")) if candidates else None,
                           noise_floor_pct=noise_floor_pct, alpha=alpha, max_effects=max_effects, seed=seed)
     rows, n_points = _rows_and_points(modes_file)
-    from tiremodal_cli.tyre.fit import modes_from_rows
-
+    from tiremodal_cli.tyre.measured import modes_from_rows
     usable, skipped = modes_from_rows(rows, min_confidence=min_confidence, split_pairs="members")
     if not usable:
         raise DataFormatError(no_usable_modes(modes_file, rows, skipped))

@@ -116,7 +116,7 @@ def to_rows(t: ModalTable) -> list[dict]:
     -------
     list of dict
         Keys of :data:`COLUMNS` (``frequency_hz`` in Hz, ``damping_ratio`` a fraction …),
-        what ``identify``, ``diagnose`` and :func:`tiremodal_cli.tyre.fit.modes_from_rows` read.
+        what ``identify``, ``diagnose`` and :func:`tiremodal_cli.tyre.measured.modes_from_rows` read.
     """
     rows = []
     # carried from the stabilization when the table comes from the modal stage; rebuilt from

@@ -38,7 +38,9 @@ from tiremodal_cli.errors import DataFormatError, ParameterError, TiremodalError
 from tiremodal_cli.io.files import _UMASK, dumps, install_dir, sha256_file, write_text_atomic
 from tiremodal_cli.io.ingest import test_folder_kind
 from tiremodal_cli.tyre.model import TyreParameters
-from tiremodal_cli.workflow.pipeline import RunOptions, is_complete, read_manifest, run
+from tiremodal_cli.workflow.manifest import is_complete, read_manifest
+from tiremodal_cli.workflow.pipeline import run
+from tiremodal_cli.workflow.run_options import RunOptions
 
 __all__ = ["BatchTest", "Job", "BatchConfig", "discover", "load_config", "plan", "run_one", "executor", "run_batch",
            "summary_rows", "write_summary", "read_summary", "SUMMARY_CSV", "SUMMARY_JSONL", "PARTIAL"]

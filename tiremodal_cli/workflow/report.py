@@ -28,7 +28,8 @@ import numpy as np
 from tiremodal_cli import names
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import _UMASK, install_dir, write_text_atomic
-from tiremodal_cli.workflow.pipeline import MANIFEST, read_manifest, verify_manifest
+from tiremodal_cli.workflow.manifest import read_manifest, verify_manifest
+from tiremodal_cli.workflow.run_options import MANIFEST
 
 __all__ = ["FIGURES", "report_run", "report_batch", "report", "REPORT_HTML", "INDEX_HTML"]
 
@@ -104,7 +105,7 @@ def _page(title: str, body: str, footer: str = "") -> str:
 
 
 def _written_by() -> str:
-    from tiremodal_cli.workflow.pipeline import provenance
+    from tiremodal_cli.workflow.manifest import provenance
 
     p = provenance()
     return (f"Page written {p['created_utc']} by tiremodal {p['tiremodal_version']}"
@@ -575,7 +576,7 @@ def report(outdir, *, progress=None) -> list[Path]:
     Parameters
     ----------
     outdir : path-like
-        A folder written by ``run`` (:func:`tiremodal_cli.workflow.pipeline.run_folder`) or ``batch``.
+        A folder written by ``run`` (:func:`tiremodal_cli.workflow.run_folder.run_folder`) or ``batch``.
     progress : callable, optional
         For a batch: called with (test name, done, total) after each test's page.
 

@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from tiremodal_cli.tyre.model import TyreParameters
-from tiremodal_cli.tyre.ring import RING_VARIANTS, RingParameters
+from tiremodal_cli.tyre.ring_parameters import RING_VARIANTS, RingParameters
 from tiremodal_cli.tyre.simulate import Faults, SimulationConfig, half_sine_spectrum, simulate
 
 __all__ = ["Case", "FACTORS", "REFERENCE", "PHYSICS", "PAIRS", "EXPECTED_DIAGNOSIS", "matrix", "config_for",
@@ -364,7 +364,7 @@ def detectable(case: "Case", groups, params: TyreParameters) -> dict:
     if case.physics == "none":
         return {"detectable": False, "rms_pct": 0.0, "p_value": 1.0, "set_aside": 0}
     from tiremodal_cli.diagnose.loop import DiagnoseOptions, base_fit, residual_analysis
-    from tiremodal_cli.tyre.fit import MeasuredMode
+    from tiremodal_cli.tyre.measured import MeasuredMode
     from tiremodal_cli.tyre.robust import with_sigma
 
     modes = []
@@ -391,7 +391,7 @@ def run_case(case: Case, workdir) -> dict:
     (type and message), never raised.
     """
     from tiremodal_cli.io.measurement import write_measurement
-    from tiremodal_cli.workflow.pipeline import RunOptions
+    from tiremodal_cli.workflow.run_options import RunOptions
     from tiremodal_cli.workflow.pipeline import run as run_pipeline
 
     workdir = Path(workdir)
