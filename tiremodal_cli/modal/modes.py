@@ -75,6 +75,8 @@ class ModalOptions:
             raise ParameterError(f"method={self.method!r}; allowed: lsce, plscf, both")
         if not 2 <= self.max_order <= 400:
             raise ParameterError(f"max_order={self.max_order} must be 2 … 400")
+        if self.poly_order < 1 or self.skip < 0:
+            raise ParameterError(f"poly_order={self.poly_order} must be ≥ 1 and skip={self.skip} ≥ 0")
 
 
 @dataclass(frozen=True)
@@ -291,7 +293,7 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
     return d, modes, rej, data.back @ fit.synthesis
 
 
-def _result(band: _Band, shape, modes, synth, exp_tau_s, **extra) -> ModalResult:
+def _result(band: _Band, shape, modes, synth, exp_tau_s, *, diagrams, rejected, meta) -> ModalResult:
     """The merged modes as a ModalResult: shapes, fit errors and synthesis back in the given
     form with NaN on the dead channels, frequencies and damping corrected for the window."""
     n_c, n_p = shape[:2]
@@ -306,14 +308,14 @@ def _result(band: _Band, shape, modes, synth, exp_tau_s, **extra) -> ModalResult
     syn = np.full((n_c, n_p, band.freq.size), np.nan + 0j)
     syn[live] = synth.reshape(n_live, n_p, -1)
     f_true, z_true = poles_to_modal(correct_poles(s, exp_tau_s))
-    extra["meta"].update(order_energy=[m.order_energy for m in modes],
-                         significance_in_group=[m.significance_in_group for m in modes])
+    meta = {**meta, "order_energy": [m.order_energy for m in modes],
+            "significance_in_group": [m.significance_in_group for m in modes]}
     return ModalResult(freq_hz=f_true, damping_ratio=z_true, poles=s, shapes=shapes,
                        mpc=np.array([mpc(m.residues) for m in modes]),
                        significance=np.array([m.significance for m in modes]),
                        group=np.array([m.group for m in modes]), fit_error=err, synthesis=syn,
-                       band_freq_hz=band.freq, frequency_std_hz=np.array([m.frequency_std_hz for m in modes]),
-                       **extra)
+                       band_freq_hz=band.freq, diagrams=diagrams, rejected=rejected, meta=meta,
+                       frequency_std_hz=np.array([m.frequency_std_hz for m in modes]))
 
 
 def confirmed(a: "ModalResult", b: "ModalResult") -> np.ndarray:
