@@ -25,13 +25,12 @@ from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.frf.estimate import FRFResult
 from tiremodal_cli.io.files import atomic_path
 from tiremodal_cli.io.uffgeometry import node_coordinates, node_geometry, point_angles
-from tiremodal_cli.io.uffunits import frf_units
+from tiremodal_cli.io.uffunits import SPEC_OF_FORM, frf_units
 
 __all__ = ["write_frf_uff", "read_frf_uff", "describe_frf_uff", "is_uff", "uff_function_types"]
 
 log = logging.getLogger(__name__)
 
-_SPEC = {"accelerance": 12, "mobility": 11, "receptance": 8}  # UFF specific data types
 #: the fields every dataset 58 that tiremodal writes shares, whatever it holds
 _COMMON_58 = dict(
     binary=0, load_case_id=0, rsp_dir=3, ref_ent_name="hammer", ref_dir=3,
@@ -92,7 +91,7 @@ def _frf_and_coherence_sets(r: FRFResult, ic: int, ip: int, *, node0: int, date:
                   id2=f"{name} / point {int(r.point_index[ip]) + 1}", id3=date, id4=(test_name or "NONE")[:80],
                   id5=f"averages {int(r.n_averages[ip])}", x=r.freq_hz)
     return [pyuff.prepare_58(
-                func_type=4, ordinate_spec_data_type=_SPEC[r.form], orddenom_spec_data_type=13,
+                func_type=4, ordinate_spec_data_type=SPEC_OF_FORM[r.form], orddenom_spec_data_type=13,
                 ordinate_axis_units_lab=FORM_UNITS[r.form].split("/N")[0], orddenom_axis_units_lab="N",
                 id1=f"tiremodal {__version__} {r.estimator} {r.form}", data=r.H[ic, ip].astype(complex), **common),
             pyuff.prepare_58(

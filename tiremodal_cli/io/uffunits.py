@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import re
 
-from tiremodal_cli.conventions import FORM_UNITS
+from tiremodal_cli.conventions import ACCELERANCE, FORM_UNITS, MOBILITY, RECEPTANCE
 from tiremodal_cli.errors import DataFormatError
 
-__all__ = ["RESPONSE_UNITS", "FORCE_UNITS", "frf_units"]
+__all__ = ["RESPONSE_UNITS", "FORCE_UNITS", "SPEC_OF_FORM", "frf_units"]
 
-_FORM_OF_SPEC = {12: "accelerance", 11: "mobility", 8: "receptance"}
+#: UFF dataset 58 ordinate specific data type of each form (12 acceleration, 11 velocity, 8 displacement)
+SPEC_OF_FORM = {ACCELERANCE: 12, MOBILITY: 11, RECEPTANCE: 8}
+_FORM_OF_SPEC = {v: k for k, v in SPEC_OF_FORM.items()}
 _G = 9.80665  # standard gravity, m/s² (ISO 80000-3)
 #: response units a UFF file may name (lower case, spaces removed) → (form, factor to SI)
 RESPONSE_UNITS = {
