@@ -308,7 +308,7 @@ def test_modes_do_not_depend_on_how_points_are_stored():
 def test_coherence_threshold_is_the_noise_quantile():
     """Pure noise through H1 with n_d averages: the threshold is exceeded by 1 % of lines."""
     from tiremodal_cli.frf.estimate import estimate
-    from tiremodal_cli.modal.modes import coherence_threshold
+    from tiremodal_cli.modal.band import coherence_threshold
     rng = np.random.default_rng(0)
     for n_d in (2, 3, 5):
         F = rng.standard_normal((n_d, 20000)) + 1j * rng.standard_normal((n_d, 20000))
@@ -323,7 +323,7 @@ def test_default_band_follows_the_data_not_the_sample_rate(fs):
     """The default band holds the n = 1 and n = 2 modes at any sample rate (the old
     0.04 fs start lost them at 2,048 Hz and above), and stops where the coherence fails
     (the hammer's spectrum falls towards its first zero at 1.5 / pulse width)."""
-    from tiremodal_cli.modal.modes import default_band
+    from tiremodal_cli.modal.band import default_band
     s = simulate(SimulationConfig(n_points=34, n_hits=3, sample_rate=fs, n_samples=4096, noise=0.02, seed=1,
                                   params=TyreParameters(m_w=1000.0)))
     r = compute_frf(s.measurement, FRFOptions(band_hz=(0.0, 0.3125 * fs), exp_end=0.05))

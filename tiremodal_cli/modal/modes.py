@@ -18,7 +18,7 @@ from threadpoolctl import threadpool_limits
 from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.errors import DataFormatError, ParameterError
 from tiremodal_cli.frf.windows import correct_poles
-from tiremodal_cli.modal.band import band_or_every_line, coherence_threshold, default_band
+from tiremodal_cli.modal.band import band_or_every_line, default_band
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
@@ -32,10 +32,10 @@ from tiremodal_cli.modal.table import table_from_result
 log = logging.getLogger(__name__)
 GROUP_MAX_ORDER = 40  # an order group holds a few modes, plus what models the band edges
 
-# coherence_threshold and default_band (modal.band) and SAME_POLE_FLOOR_BW (modal.merge)
-# are re-exported: tests and benchmarks/validation.py import them from here.
-__all__ = ["ModalOptions", "ModalResult", "coherence_threshold", "default_band", "estimate_modes", "is_circumferential",
-           "modal_table_from_frf", "confirmed", "SAME_POLE_FLOOR_BW"]
+# SAME_POLE_FLOOR_BW (modal.merge) is re-exported: benchmarks/validation.py imports it from
+# here (it should import it from modal.merge; then it goes).
+__all__ = ["ModalOptions", "ModalResult", "estimate_modes", "is_circumferential", "modal_table_from_frf", "confirmed",
+           "SAME_POLE_FLOOR_BW"]
 
 
 @dataclass(frozen=True)
