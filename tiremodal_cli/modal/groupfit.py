@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import partial
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.stats import chi2
@@ -18,6 +19,9 @@ from scipy.stats import chi2
 from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import lsfd, lsfd_participation, significance
+
+if TYPE_CHECKING:  # for the annotation only: modes imports this module
+    from tiremodal_cli.modal.modes import ModalOptions
 
 __all__ = ["GroupData", "GroupFit", "NOISE_ALPHA", "fit_group", "fit_group_poly"]
 
@@ -39,7 +43,7 @@ class GroupData:
     back: np.ndarray
     H_phys: np.ndarray
     form: str
-    opt: object
+    opt: ModalOptions
     group: int
     n_h: int
     n_c: int
