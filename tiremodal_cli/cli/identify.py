@@ -10,14 +10,15 @@ import numpy as np
 from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
 from tiremodal_cli.tyre.fit import PAPER_GA, FitOptions, fit, fit_report, modes_from_rows, predict_table
 from tiremodal_cli.tyre.robust import robust_fit, with_sigma
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.errors import DataFormatError
+from tiremodal_cli.cli.options import (FiniteRange, PlotPath, Progress, echo_json, json_option, load_params, no_usable_modes,
+                      overwrite_option, params_options, read_table_rows)
+from tiremodal_cli.workflow.summary import rows_to_csv
 
 #: Floor of a measured frequency's relative uncertainty for the screen, % (diagnose's:
 #: the repeatability of an impact test's frequencies)
 NOISE_FLOOR_PCT = 0.1
-from tiremodal_cli.cli.main import cli
-from tiremodal_cli.errors import DataFormatError
-from tiremodal_cli.cli.options import (FiniteRange, PlotPath, Progress, echo_json, json_option, load_params, no_usable_modes,
-                      overwrite_option, params_options, read_table_rows, rows_to_csv)
 
 
 #: Upper bounds of the search's size. Each member of each generation is one model solve

@@ -140,18 +140,6 @@ def read_table_rows(path: Path):
     return to_rows(read_modal(path))
 
 
-def rows_to_csv(rows, fieldnames=None) -> str:
-    """CSV text of a list of dicts (header from the first row unless given)."""
-    import csv
-    import io
-
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(fieldnames or rows[0]), lineterminator="\n", extrasaction="ignore")
-    w.writeheader()
-    w.writerows(rows)
-    return buf.getvalue()
-
-
 class FiniteRange(click.FloatRange):
     """A float option in a range that is also finite (click's FloatRange lets nan and inf by)."""
 

@@ -155,7 +155,7 @@ def build_config(config_file, overrides: dict, params: dict, effects: dict, faul
     return SimulationConfig(params=p, effects=eff, faults=flt, channels=chans, **extra, **scal)
 
 
-def _toml(mapping: dict) -> str:
+def mapping_toml(mapping: dict) -> str:
     """The UFF mapping as TOML (two flat tables; no TOML writer in the standard library)."""
     lines = ["# impact points: UFF reference node -> angle in degrees", "[points]"]
     lines += [f'"{k}" = {v!r}' for k, v in mapping["points"].items()]
@@ -233,7 +233,7 @@ def simulate_cmd(output, config_file, model, variant, truth, seed, n_points, n_h
     if uff_dir is not None:
         uff_dir.mkdir(parents=True, exist_ok=True)
         _, mapping = write_uff_time(uff_dir, sim.measurement, overwrite=overwrite)
-        write_text_atomic(uff_dir / "mapping.toml", _toml(mapping), overwrite=overwrite)
+        write_text_atomic(uff_dir / "mapping.toml", mapping_toml(mapping), overwrite=overwrite)
     summary = {"output": str(output), "truth": str(truth), "n_points": sim.measurement.n_points,
                "n_hits": sim.measurement.n_hits, "n_channels": sim.measurement.n_channels,
                "n_samples": sim.measurement.n_samples, "sample_rate": sim.measurement.sample_rate,
