@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import click
@@ -15,6 +16,7 @@ from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.cli.options import (FiniteRange, PlotPath, Progress, echo_json, json_option, load_params, no_usable_modes,
                       overwrite_option, params_options, read_table_rows)
 from tiremodal_cli.workflow.summary import rows_to_csv
+# Start-up: matplotlib (tiremodal_cli.plots) is imported inside the command, only when a figure is asked for.
 
 #: Floor of a measured frequency's relative uncertainty for the screen, % (diagnose's:
 #: the repeatability of an impact test's frequencies)
@@ -99,8 +101,6 @@ def identify_cmd(modes_file, params_file, param_items, free, bounds, weights, se
     base, effects = load_params(params_file, param_items)
     opt = fit_options(free, bounds, weights, seed, paper_ga, population, generations)
     if effects:
-        from dataclasses import replace
-
         opt = replace(opt, effects=effects)
     rows = read_table_rows(modes_file)
     modes, skipped = modes_from_rows(rows, min_confidence=min_confidence, source=str(modes_file))

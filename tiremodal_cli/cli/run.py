@@ -8,6 +8,7 @@ import click
 
 from tiremodal_cli.errors import OutputExistsError
 from tiremodal_cli.io.files import refuse_input_as_output
+from tiremodal_cli.io.frffile import is_uff
 from tiremodal_cli.workflow.pipeline import MANIFEST, OUTPUTS, RunOptions, run_folder
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import FiniteRange, StageProgress, band_option, echo_json, json_option, load_params, params_options
@@ -56,8 +57,6 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
         base = base.replace(m_w=1000.0)
     opt = RunOptions(band=tuple(band) if band else None, exp_end=None if no_exp_window else exp_end, seed=seed,
                      noise_floor_pct=noise_floor_pct, max_effects=max_effects, pressure_from_file=not p0_from_params)
-    from tiremodal_cli.io.frffile import is_uff
-
     bar = StageProgress("run", ["read FRFs" if is_uff(measurement) else "frf", "lsce", "identify", "diagnose"])
     try:
         summary = run_folder(measurement, outdir, opt, params=base, overwrite=overwrite, progress=bar,

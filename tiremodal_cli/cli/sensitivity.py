@@ -13,6 +13,7 @@ from tiremodal_cli.tyre.sensitivity import PAPER_STUDY, coefficients, single_var
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import PlotPath, echo_json, json_option, load_params, overwrite_option, params_options
 from tiremodal_cli.workflow.summary import rows_to_csv
+# Start-up: matplotlib (tiremodal_cli.plots) is imported inside the command, only when a figure is asked for.
 
 
 @cli.command("sensitivity", epilog="\b\nExample:\n  tiremodal sensitivity --n-max 10")

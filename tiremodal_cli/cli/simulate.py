@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+import math
+import typing
 from pathlib import Path
 
 import click
@@ -15,7 +17,7 @@ from tiremodal_cli.io.files import atomic_path, check_overwrite, check_size, ref
 from tiremodal_cli.io.ingest.uff import write_uff_time
 from tiremodal_cli.io.measurement import write_measurement
 from tiremodal_cli.tyre.model import TyreParameters
-from tiremodal_cli.tyre.ring import RING_VARIANTS, RingParameters
+from tiremodal_cli.tyre.ring import RING_VARIANTS, RingParameters, elements_for
 from tiremodal_cli.tyre.simulate import MODELS, Channel, Faults, SimulationConfig, simulate
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import FiniteRange, Progress, dumps, echo_json, json_option, overwrite_option, parse_key_values
@@ -56,9 +58,6 @@ def _typed_scalars(scal: dict, where: str) -> dict:
     """The config file's scalars checked against SimulationConfig's field types: an int field
     takes an integer (not a bool), a float field a finite number, a str field text, a bool
     field true/false; None where the default is None (damping)."""
-    import math
-    import typing
-
     hints = typing.get_type_hints(SimulationConfig)
     out = {}
     for k, v in scal.items():
@@ -94,8 +93,6 @@ def estimate_bytes(cfg: SimulationConfig) -> float:
     if getattr(cfg, "model", "paper") == "ring":
         # the ring's mesh (refined for every order below 1.25 × Nyquist), ≤ 5 fields on 2 nodes
         # per element; its condensed dense matrices and eigensolver workspace: 3 of n_dof²
-        from tiremodal_cli.tyre.ring import elements_for
-
         ne = max(cfg.ring.n_elements, elements_for(cfg.ring, 0.625 * cfg.sample_rate))
         n_dof = 10.0 * ne
         n_modes = n_dof
