@@ -40,7 +40,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from tiremodal_cli.modal.lsce import principal_responses, sweep
-from tiremodal_cli.tyre.model import TyreParameters, frf, paper_damping, solve_modes
+from tiremodal_cli.tyre.model import TyreParameters, paper_damping
+from tiremodal_cli.tyre.solve import frf, solve_modes
 from tiremodal_cli.modal.modes import ModalOptions, estimate_modes
 
 

@@ -19,7 +19,9 @@ import tempfile
 from pathlib import Path
 
 from tiremodal_cli.diagnose.loop import DiagnoseOptions, diagnose
-from tiremodal_cli.tyre.fit import FitOptions, fit, modes_from_rows
+from tiremodal_cli.tyre.fit import fit
+from tiremodal_cli.tyre.fit_types import FitOptions
+from tiremodal_cli.tyre.measured import modes_from_rows
 from tiremodal_cli.io.measurement import open_measurement
 from tiremodal_cli.tyre.model import TyreParameters
 

@@ -31,7 +31,8 @@ from tiremodal_cli.cli.simulate import mapping_toml
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.io.ingest.uff import write_uff_time
 from tiremodal_cli.io.measurement import write_measurement
-from tiremodal_cli.workflow.pipeline import MANIFEST, RunOptions, is_complete
+from tiremodal_cli.workflow.manifest import is_complete
+from tiremodal_cli.workflow.run_options import MANIFEST, RunOptions
 from tiremodal_cli.tyre.simulate import CAMPAIGN_CONFIG, Faults, simulate, simulate_campaign
 
 from conftest import run_cli

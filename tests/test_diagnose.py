@@ -14,7 +14,9 @@ from tiremodal_cli.tyre.effects import resolve_effects
 from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
 from tiremodal_cli.io.measurement import write_measurement
 from tiremodal_cli.io.modalfile import to_rows
-from tiremodal_cli.tyre.model import TyreParameters, branch_frequencies, point_mass_pairs, solve_modes
+from tiremodal_cli.tyre.frequencies import branch_frequencies, point_mass_pairs
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.solve import solve_modes
 from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
 from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
@@ -172,7 +174,7 @@ def test_run_writes_every_stage_and_a_manifest(tmp_path):
         assert (tmp_path / "out" / name).is_file()
     assert meas.read_bytes() == before  # input never modified
     assert not list((tmp_path / "out").glob("*.part"))
-    from tiremodal_cli.workflow.pipeline import is_complete
+    from tiremodal_cli.workflow.manifest import is_complete
 
     assert is_complete(tmp_path / "out", meas)
     res = run_cli(["run", meas, "-o", tmp_path / "out"])

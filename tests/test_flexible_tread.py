@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 
 from tiremodal_cli.tyre.flexible_tread import errors_by_branch, fit_flexible_tread, flexible_tread_hz
-from tiremodal_cli.tyre.fit import FitOptions, MeasuredMode, fit, modes_from_rows
+from tiremodal_cli.tyre.fit import fit
+from tiremodal_cli.tyre.fit_types import FitOptions
+from tiremodal_cli.tyre.measured import MeasuredMode, modes_from_rows
 from tiremodal_cli.tyre.model import TyreParameters, closed_form_hz
 
 TABLE_A1 = Path(__file__).resolve().parents[1] / "sample_data" / "paper_table_a1.csv"

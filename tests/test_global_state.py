@@ -15,8 +15,8 @@ def test_importing_plots_keeps_the_matplotlib_backend():
 
 
 def test_numpy_error_state_is_restored_after_a_point_mass_solve():
-    from tiremodal_cli.tyre.model import TyreParameters, point_mass_pairs
-
+    from tiremodal_cli.tyre.frequencies import point_mass_pairs
+    from tiremodal_cli.tyre.model import TyreParameters
     before = np.geterr()
     point_mass_pairs(TyreParameters(), 1.0, 6)
     assert np.geterr() == before

@@ -7,7 +7,15 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tiremodal_cli.tyre.fit import FitOptions, MeasuredMode, fit, model_frequencies, modes_from_rows, predict_table
+from tiremodal_cli.tyre.fit import fit
+
+from tiremodal_cli.tyre.fit_types import FitOptions
+
+from tiremodal_cli.tyre.frequencies import model_frequencies
+
+from tiremodal_cli.tyre.measured import MeasuredMode, modes_from_rows
+
+from tiremodal_cli.tyre.predict import predict_table
 from tiremodal_cli.tyre.model import PAPER_PARAMETERS, TyreParameters, closed_form_hz
 from tiremodal_cli.tyre.sensitivity import coefficients, single_variable
 

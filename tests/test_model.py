@@ -7,9 +7,8 @@ from numpy.testing import assert_allclose
 
 from tiremodal_cli.tyre.effects import EFFECTS
 from tiremodal_cli.errors import ParameterError
-from tiremodal_cli.tyre.model import PAPER_PARAMETERS as P, closed_form_hz, frf, solve_modes
-
-
+from tiremodal_cli.tyre.model import PAPER_PARAMETERS as P, closed_form_hz
+from tiremodal_cli.tyre.solve import frf, solve_modes
 def table(m, branch):
     """{n: frequency} of the cos members of a branch."""
     return {int(n): f for f, n, h, b in zip(m.freq_hz, m.n, m.harmonic, m.branch) if b == branch and h == "cos"}

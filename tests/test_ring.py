@@ -11,7 +11,8 @@ import pytest
 
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.tyre.model import TyreParameters, closed_form_hz
-from tiremodal_cli.tyre.ring import RING_VARIANTS, RingParameters, classical_ring_hz, ring_modes
+from tiremodal_cli.tyre.ring import classical_ring_hz, ring_modes
+from tiremodal_cli.tyre.ring_parameters import RING_VARIANTS, RingParameters
 
 FREE = dict(m_s=0.0, k_r1=0.0, k_r2=0.0, tangential=True, EA=1e9)
 

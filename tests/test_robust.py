@@ -9,9 +9,16 @@ import dataclasses
 import numpy as np
 import pytest
 
-from tiremodal_cli.tyre.fit import FitOptions, MeasuredMode, fit, model_frequencies
+from tiremodal_cli.tyre.fit import fit
+
+from tiremodal_cli.tyre.fit_types import FitOptions
+
+from tiremodal_cli.tyre.frequencies import model_frequencies
+
+from tiremodal_cli.tyre.measured import MeasuredMode
 from tiremodal_cli.tyre.model import TyreParameters
-from tiremodal_cli.tyre.ring import RingParameters, ring_modes
+from tiremodal_cli.tyre.ring import ring_modes
+from tiremodal_cli.tyre.ring_parameters import RingParameters
 from tiremodal_cli.tyre.robust import robust_fit, with_sigma, z_critical
 
 PAPER = TyreParameters()  # the paper's identified values, the ring's defaults too
@@ -122,7 +129,7 @@ def test_tangential_effect_is_the_ring_with_a_tangential_belt():
     tangentially (EA = 1e8 N, k_t1 and k_t2 in series): within 0.05 % for 2 ≤ n ≤ 12 on
     both branches and 0.3 % at n = 1 (the belt's finite EA), where the seed model is off by
     up to 12 %."""
-    from tiremodal_cli.tyre.ring import RING_VARIANTS
+    from tiremodal_cli.tyre.ring_parameters import RING_VARIANTS
 
     v = RING_VARIANTS["tangential"]
     m = ring_modes(RingParameters().replace(**v), f_max_hz=400.0)

@@ -15,7 +15,9 @@ from pathlib import Path
 import pytest
 
 from tiremodal_cli.io.measurement import write_measurement
-from tiremodal_cli.workflow.pipeline import MANIFEST, OUTPUTS, RunOptions, run_folder, verify_manifest
+from tiremodal_cli.workflow.manifest import verify_manifest
+from tiremodal_cli.workflow.run_folder import run_folder
+from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions
 from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 from conftest import run_cli

@@ -22,9 +22,13 @@ import pytest
 
 from tiremodal_cli.diagnose.loop import diagnose
 from tiremodal_cli.tyre.effects import resolve_effects
-from tiremodal_cli.tyre.fit import FitOptions, fit, modes_from_rows
-from tiremodal_cli.tyre.model import (ParamStack, TyreParameters, branch_frequencies, point_mass_pairs, solve_modes,
-                                 stacked_branch_frequencies, stacked_point_mass_pairs)
+from tiremodal_cli.tyre.fit import fit
+from tiremodal_cli.tyre.fit_types import FitOptions
+from tiremodal_cli.tyre.measured import modes_from_rows
+from tiremodal_cli.tyre.frequencies import branch_frequencies, point_mass_pairs
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.solve import solve_modes
+from tiremodal_cli.tyre.stacked import ParamStack, stacked_branch_frequencies, stacked_point_mass_pairs
 
 ROOT = Path(__file__).resolve().parents[1]
 BASE = ROOT / "tests" / "data" / "perf_baseline"

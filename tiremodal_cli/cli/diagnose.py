@@ -11,7 +11,7 @@ from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, writ
 from tiremodal_cli.io.modalfile import read_modal
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.errors import DataFormatError
-from tiremodal_cli.tyre.fit import modes_from_rows
+from tiremodal_cli.tyre.measured import modes_from_rows
 from tiremodal_cli.cli.options import (FiniteRange, PlotPath, Progress, dumps, echo_json, json_option, load_params, no_usable_modes,
                       overwrite_option, params_options, read_table_rows)
 # Start-up: matplotlib (tiremodal_cli.plots) is imported inside the command, only when a figure is asked for.

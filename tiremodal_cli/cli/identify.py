@@ -9,7 +9,10 @@ import click
 import numpy as np
 
 from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
-from tiremodal_cli.tyre.fit import PAPER_GA, FitOptions, fit, fit_report, modes_from_rows, predict_table
+from tiremodal_cli.tyre.fit import fit
+from tiremodal_cli.tyre.fit_types import PAPER_GA, FitOptions
+from tiremodal_cli.tyre.measured import modes_from_rows
+from tiremodal_cli.tyre.predict import fit_report, predict_table
 from tiremodal_cli.tyre.robust import robust_fit, with_sigma
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.errors import DataFormatError

@@ -15,7 +15,8 @@ from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
 from tiremodal_cli.modal.mac import mac_matrix, subspace_mac
 from tiremodal_cli.io.modalfile import read_modal
-from tiremodal_cli.tyre.model import TyreParameters, observation, solve_modes
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.solve import observation, solve_modes
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import PlotPath, echo_json, json_option, overwrite_option
 

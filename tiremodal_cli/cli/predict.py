@@ -10,8 +10,9 @@ import numpy as np
 from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
 from tiremodal_cli.io.frffile import read_frf
 from tiremodal_cli.errors import DataFormatError
-from tiremodal_cli.tyre.model import frf as model_frf
-from tiremodal_cli.tyre.model import paper_damping, solve_modes
+from tiremodal_cli.tyre.model import paper_damping
+from tiremodal_cli.tyre.solve import frf as model_frf
+from tiremodal_cli.tyre.solve import solve_modes
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import FiniteRange, PlotPath, echo_json, json_option, load_params, overwrite_option, params_options
 from tiremodal_cli.workflow.summary import rows_to_csv

@@ -9,7 +9,8 @@ import click
 from tiremodal_cli.errors import OutputExistsError
 from tiremodal_cli.io.files import refuse_input_as_output
 from tiremodal_cli.io.frffile import is_uff
-from tiremodal_cli.workflow.pipeline import MANIFEST, OUTPUTS, RunOptions, run_folder
+from tiremodal_cli.workflow.run_folder import run_folder
+from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import FiniteRange, StageProgress, band_option, echo_json, json_option, load_params, params_options
 

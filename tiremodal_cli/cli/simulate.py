@@ -17,7 +17,8 @@ from tiremodal_cli.io.files import atomic_path, check_overwrite, check_size, ref
 from tiremodal_cli.io.ingest.uff import write_uff_time
 from tiremodal_cli.io.measurement import write_measurement
 from tiremodal_cli.tyre.model import TyreParameters
-from tiremodal_cli.tyre.ring import RING_VARIANTS, RingParameters, elements_for
+from tiremodal_cli.tyre.ring import elements_for
+from tiremodal_cli.tyre.ring_parameters import RING_VARIANTS, RingParameters
 from tiremodal_cli.tyre.simulate import MODELS, Channel, Faults, SimulationConfig, simulate
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import FiniteRange, Progress, dumps, echo_json, json_option, overwrite_option, parse_key_values

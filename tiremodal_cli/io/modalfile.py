@@ -138,7 +138,7 @@ def to_rows(t: ModalTable) -> list[dict]:
     -------
     list of dict
         Keys of :data:`COLUMNS` (``frequency_hz`` in Hz, ``damping_ratio`` a fraction …),
-        what ``identify``, ``diagnose`` and :func:`tiremodal_cli.tyre.fit.modes_from_rows` read.
+        what ``identify``, ``diagnose`` and :func:`tiremodal_cli.tyre.measured.modes_from_rows` read.
     """
     rows = []
     unc = frequency_uncertainty(t)

@@ -42,7 +42,13 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.special
 
-from tiremodal_cli.tyre.fit import FitOptions, FitResult, MeasuredMode, fit, model_frequencies
+from tiremodal_cli.tyre.fit import fit
+
+from tiremodal_cli.tyre.fit_types import FitOptions, FitResult
+
+from tiremodal_cli.tyre.frequencies import model_frequencies
+
+from tiremodal_cli.tyre.measured import MeasuredMode
 from tiremodal_cli.tyre.model import TyreParameters
 
 __all__ = ["SetAside", "RobustFit", "z_critical", "with_sigma", "robust_fit", "normalised_errors"]
@@ -166,43 +172,57 @@ def robust_fit(modes, base: TyreParameters, opt: FitOptions, *, alpha: float = 0
     res = fit([modes[i] for i in range(N) if i not in out], base, opt)
     for _ in range(2 * N):
         fm, z = normalised_errors(res, modes)
-        kept = [i for i in range(N) if i not in out]
         med, s = _center_scale(z)
-        s = s if scale is None else scale
-        t = np.abs(z - med) / s
-        back = [i for i in out if np.isfinite(t[i]) and t[i] <= z_crit]
-        cand = [i for i in kept if t[i] > z_crit and not protect(modes[i])]
-        if back and not cand:
-            out -= set(back)  # the refit brought them back: fit them again
-        elif cand and len(out) < max_out:
-            # the worst, and with it every mode at least half as far out (gross outliers in
-            # one step; one dragged off by them comes back below, "back")
-            worst = max(t[i] for i in cand)
-            for i in sorted(cand, key=lambda i: -t[i]):
-                if t[i] >= 0.5 * worst and len(out) < max_out:
-                    out.add(i)
-        else:
+        new_out = _screen(np.abs(z - med) / (s if scale is None else scale), out, z_crit, max_out,
+                          [protect(m) for m in modes])
+        if new_out is None:
             break
+        out = new_out
         kept = [i for i in range(N) if i not in out]
         # one mode more or less moves the optimum a little: least squares from it
         res = fit([modes[i] for i in kept], res.parameters,
                   dataclasses.replace(opt, search="polish", start=_start_of(res)))
     fm, z = normalised_errors(res, modes)
-    kept = [i for i in range(N) if i not in out]
     med, s = _center_scale(z)
     s = s if scale is None else scale
-    aside = []
-    for i in sorted(out, key=lambda i: modes[i].frequency_hz):
-        m = modes[i]
-        err = 100 * (fm[i] / m.frequency_hz - 1) if np.isfinite(fm[i]) else float("nan")
-        if not np.isfinite(fm[i]):
-            why = f"the model has no n = {m.n} {m.branch} mode"
-        else:
-            why = (f"the model cannot represent it: {err:+.2f} % off ({abs(z[i] - med) / s:.1f} σ from the other "
-                   f"modes' errors; limit {z_crit:.1f} σ for {N} modes at α = {alpha:g})")
-        aside.append(SetAside(m, float(fm[i]), float(err), float(z[i]), why))
-    return RobustFit(fit=res, kept=tuple(modes[i] for i in kept), set_aside=tuple(aside), z_crit=z_crit,
-                     scale=s, alpha=alpha)
+    aside = tuple(_set_aside(modes[i], fm[i], z[i], (med, s, z_crit, N, alpha))
+                  for i in sorted(out, key=lambda i: modes[i].frequency_hz))
+    return RobustFit(fit=res, kept=tuple(modes[i] for i in range(N) if i not in out), set_aside=aside,
+                     z_crit=z_crit, scale=s, alpha=alpha)
+
+
+def _screen(t, out: set, z_crit: float, max_out: int, protected) -> set | None:
+    """One step of the screen on the distances ``t`` (in spreads) of every mode's z from
+    the median: the set-aside modes after it, or None when nothing changes.
+
+    Set-aside modes back inside the limit come back (when no kept mode is out); else the
+    worst kept mode beyond it is set aside, and with it every one at least half as far out
+    (gross outliers in one step; one dragged off by them comes back at a later step)."""
+    kept = [i for i in range(len(t)) if i not in out]
+    back = [i for i in out if np.isfinite(t[i]) and t[i] <= z_crit]
+    cand = [i for i in kept if t[i] > z_crit and not protected[i]]
+    if back and not cand:
+        return out - set(back)
+    if not (cand and len(out) < max_out):
+        return None
+    out = set(out)
+    worst = max(t[i] for i in cand)
+    for i in sorted(cand, key=lambda i: -t[i]):
+        if t[i] >= 0.5 * worst and len(out) < max_out:
+            out.add(i)
+    return out
+
+
+def _set_aside(m: MeasuredMode, fm: float, z: float, rule: tuple) -> SetAside:
+    """A set-aside mode with its reason; ``rule`` = (median z, spread, limit, N, α)."""
+    med, s, z_crit, N, alpha = rule
+    err = 100 * (fm / m.frequency_hz - 1) if np.isfinite(fm) else float("nan")
+    if not np.isfinite(fm):
+        why = f"the model has no n = {m.n} {m.branch} mode"
+    else:
+        why = (f"the model cannot represent it: {err:+.2f} % off ({abs(z - med) / s:.1f} σ from the other "
+               f"modes' errors; limit {z_crit:.1f} σ for {N} modes at α = {alpha:g})")
+    return SetAside(m, float(fm), float(err), float(z), why)
 
 
 def _start_of(res: FitResult) -> dict:

@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 
 from tiremodal_cli.errors import ParameterError
-from tiremodal_cli.tyre.fit import model_frequencies
+from tiremodal_cli.tyre.frequencies import model_frequencies
 from tiremodal_cli.tyre.model import TyreParameters
 
 __all__ = ["PAPER_STUDY", "single_variable", "coefficients"]

@@ -19,8 +19,10 @@ import scipy.signal
 from tiremodal_cli import __version__
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.io.measurement import Measurement
-from tiremodal_cli.tyre.model import ModalModel, TyreParameters, frf, paper_damping, solve_modes
-from tiremodal_cli.tyre.ring import RingModes, RingParameters, elements_for, ring_frf, ring_modes, ring_observation
+from tiremodal_cli.tyre.model import TyreParameters, paper_damping
+from tiremodal_cli.tyre.solve import ModalModel, frf, observation, solve_modes
+from tiremodal_cli.tyre.ring import RingModes, elements_for, ring_frf, ring_modes, ring_observation
+from tiremodal_cli.tyre.ring_parameters import RingParameters
 
 __all__ = ["Channel", "Faults", "SimulationConfig", "Simulation", "simulate", "half_sine_spectrum",
            "DEFAULT_CHANNELS", "CAMPAIGN_CONFIG", "simulate_campaign", "MODELS", "RING_DAMPING"]
@@ -235,7 +237,6 @@ def _paper_source(cfg, freq, angles):
     locs = [c.location for c in cfg.channels]
     c_ang = np.array([c.angle_rad for c in cfg.channels])
     H = frf(modes, freq, zeta, locs, c_ang, angles, form="accelerance")
-    from tiremodal_cli.tyre.model import observation
     listed = []
     for r in np.flatnonzero(modes.freq_hz < 0.5 * cfg.sample_rate):
         shape = {}

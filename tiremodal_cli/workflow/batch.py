@@ -50,7 +50,9 @@ from tiremodal_cli.io.measurement import write_measurement
 from tiremodal_cli.tyre.model import TyreParameters
 from tiremodal_cli.workflow.discovery import BatchTest, discover, source_sha256
 from tiremodal_cli.workflow.executors import SerialExecutor, executor
-from tiremodal_cli.workflow.pipeline import RunOptions, is_complete, read_manifest, run
+from tiremodal_cli.workflow.manifest import is_complete, read_manifest
+from tiremodal_cli.workflow.pipeline import run
+from tiremodal_cli.workflow.run_options import RunOptions
 from tiremodal_cli.workflow.summary import SUMMARY_CSV, SUMMARY_JSONL, read_summary, summary_rows, write_summary
 
 __all__ = ["BatchTest", "Job", "BatchConfig", "discover", "load_config", "plan", "run_one", "executor", "run_batch",

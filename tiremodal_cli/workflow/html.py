@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tiremodal_cli.workflow.pipeline import provenance
+from tiremodal_cli.workflow.manifest import provenance
 
 __all__ = ["escape", "number", "table", "page", "written_by", "render", "img"]
 

@@ -28,7 +28,8 @@ from tiremodal_cli.io.files import _UMASK, install_dir, write_text_atomic
 from tiremodal_cli.io.frffile import read_frf
 from tiremodal_cli.io.modalfile import read_modal
 from tiremodal_cli.workflow.html import escape, img, number, page, render
-from tiremodal_cli.workflow.pipeline import MANIFEST, read_manifest, verify_manifest
+from tiremodal_cli.workflow.manifest import read_manifest, verify_manifest
+from tiremodal_cli.workflow.run_options import MANIFEST
 from tiremodal_cli.workflow.run_page import FIGURES, footer, run_body
 from tiremodal_cli.workflow.summary import SUMMARY_JSONL, read_summary
 
@@ -227,7 +228,7 @@ def report(outdir, *, progress=None) -> list[Path]:
     Parameters
     ----------
     outdir : path-like
-        A folder written by ``run`` (:func:`tiremodal_cli.workflow.pipeline.run_folder`) or ``batch``.
+        A folder written by ``run`` (:func:`tiremodal_cli.workflow.run_folder.run_folder`) or ``batch``.
     progress : callable, optional
         For a batch: called with (test name, done, total) after each test's page.
 

@@ -33,10 +33,10 @@ import numpy as np
 
 from tiremodal_cli.io.measurement import write_measurement
 from tiremodal_cli.tyre.model import TyreParameters
-from tiremodal_cli.tyre.ring import RING_VARIANTS, RingParameters
+from tiremodal_cli.tyre.ring_parameters import RING_VARIANTS, RingParameters
 from tiremodal_cli.tyre.simulate import Faults, SimulationConfig, simulate
-from tiremodal_cli.workflow.pipeline import RunOptions
 from tiremodal_cli.workflow.pipeline import run as run_pipeline
+from tiremodal_cli.workflow.run_options import RunOptions
 from tiremodal_cli.workflow.validation_scoring import EXPECTED_DIAGNOSIS, TOLERANCE  # noqa: F401  (re-exported)
 from tiremodal_cli.workflow.validation_scoring import (detectable, diagnosis_right, expected_groups, read_modes,
                                                        score_modes)

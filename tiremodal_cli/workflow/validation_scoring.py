@@ -29,8 +29,10 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import maximum_bipartite_matching
 
-from tiremodal_cli.diagnose.loop import DiagnoseOptions, base_fit, residual_analysis
-from tiremodal_cli.tyre.fit import MeasuredMode
+from tiremodal_cli.diagnose.loop import base_fit
+from tiremodal_cli.diagnose.options import DiagnoseOptions
+from tiremodal_cli.diagnose.statistics import residual_analysis
+from tiremodal_cli.tyre.measured import MeasuredMode
 from tiremodal_cli.tyre.model import TyreParameters
 from tiremodal_cli.tyre.robust import with_sigma
 from tiremodal_cli.tyre.simulate import SimulationConfig, half_sine_spectrum

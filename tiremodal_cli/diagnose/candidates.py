@@ -1,0 +1,143 @@
+"""Every candidate (an effect, or a nominal parameter that is off) fitted on top of the current model and judged."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from tiremodal_cli.diagnose.cavity import CavitySpec, try_cavity
+from tiremodal_cli.diagnose.options import PARAMETER_CANDIDATES, fit_options, search_start
+from tiremodal_cli.diagnose.refit import Scoring, Trial, aligned, judge, refit_on, testimony
+from tiremodal_cli.diagnose.result import Candidate, no_evidence
+from tiremodal_cli.tyre.effects import get_effect
+from tiremodal_cli.tyre.fit_types import DEFAULT_BOUNDS
+from tiremodal_cli.tyre.robust import RobustFit, robust_fit
+
+__all__ = ["try_candidate", "adopt_reason", "choose"]
+
+
+def _effect_spec(name, fixed_effects):
+    eff = get_effect(name)
+    fitted = eff.fitted_parameters()
+    fixed = {p.name: eff.diagnose_fixed.get(p.name, p.default) for p in eff.parameters if p not in fitted}
+    effects = {k: dict(v) for k, v in fixed_effects.items()}
+    effects[name] = fixed
+    return eff, fitted, effects
+
+
+def try_candidate(name: str, trial: Trial) -> Candidate:
+    """Refit every mode (the set-aside ones too) with one more candidate on top of the
+    current model, robustly; judge it on the modes either model keeps."""
+    if name in ("m_w", "rim_fixture") and trial.opt.rim == "clamped":
+        common = dict(kind="parameter" if name == "m_w" else "structural", round=trial.rnd, signature="",
+                      title=f"nominal {name} is off" if name == "m_w" else get_effect(name).title)
+        return no_evidence(name, "no evidence: the rim channel recorded no signal (a clamped rim)", common)
+    if name in PARAMETER_CANDIDATES:
+        return _try_parameter(name, trial)
+    return _try_effect(name, trial)
+
+
+def _free_split(cur) -> tuple[tuple, tuple]:
+    """The current fit's free structural parameters and its effects' (effect, parameter) pairs."""
+    free = tuple(cur.free)
+    return tuple(f for f in free if "." not in f), tuple(tuple(f.split(".", 1)) for f in free if "." in f)
+
+
+def _try_parameter(name: str, trial: Trial) -> Candidate:
+    """A nominal parameter freed on top of the current model ("a parameter value is off")."""
+    cur = trial.current.fit
+    struct_free, prev_eff_free = _free_split(cur)
+    lo, hi = DEFAULT_BOUNDS[name]
+    fo = dataclasses.replace(fit_options(trial.opt, free=struct_free + (name,), effects=dict(cur.effects),
+                                         effect_free=prev_eff_free, start=search_start(cur)), bounds={})
+    start = cur.parameters
+    p0 = start if name != "m_w" or start.m_w is not None else start.replace(m_w=1000.0)
+    common = dict(kind="parameter", title=f"nominal {name} is off", round=trial.rnd,
+                  signature="a parameter value is off, not missing physics")
+    return _judged(name, common, trial, p0, fo, Scoring((name,), {name: (lo, hi)}, trial.opt, trial.n_tried))
+
+
+def _try_effect(name: str, trial: Trial) -> Candidate:
+    """An effect of :mod:`tiremodal_cli.tyre.effects` added to the current model."""
+    cur = trial.current.fit
+    struct_free, prev_eff_free = _free_split(cur)
+    eff, fitted, effects = _effect_spec(name, dict(cur.effects))
+    efree = prev_eff_free + tuple((name, p.name) for p in fitted)
+    bounds = {f"{name}.{p.name}": (p.lower, p.upper, p.upper_is_physical) for p in fitted}
+    pnames = tuple(f"{name}.{p.name}" for p in fitted)
+    common = dict(kind=eff.kind, title=eff.title, round=trial.rnd, signature=eff.signature)
+    if eff.kind == "coupling" and not any(m.member for m in trial.current.modes):
+        return no_evidence(name, "no evidence: no split pair in the modal table", common)
+    if eff.kind == "acoustic":
+        return try_cavity(name, CavitySpec(effects, efree, bounds, list(pnames), struct_free), trial, common)
+    if eff.extra.get("needs_free_rim") and cur.parameters.m_w is None:
+        return no_evidence(name, "no evidence: the rim is clamped (its channel recorded no signal, or the "
+                                 "parameters say so)", common)
+    also = tuple(a for a in eff.extra.get("also_free", ()) if a not in struct_free)
+    if also:  # the effect's own parameter and the seed model's that it acts with (the rim mass)
+        struct_free = struct_free + also
+        pnames = pnames + also
+        bounds = {**bounds, **{a: DEFAULT_BOUNDS[a] for a in also}}
+    own = {f"{name}.{p.name}": p.default for p in fitted}
+    nominal = trial.nominal
+    fo = fit_options(trial.opt, free=struct_free, effects=effects, effect_free=efree,
+                     start={**search_start(cur), **own},
+                     extra_starts=({**search_start(cur), **(nominal or {}), **own},) if nominal else ())
+    return _judged(name, common, trial, cur.parameters, fo, Scoring(pnames, bounds, trial.opt, trial.n_tried))
+
+
+def _judged(name, common, trial: Trial, p0, fo, scoring: Scoring) -> Candidate:
+    """A candidate judged against the current model on the modes the current model keeps
+    plus the set-aside modes the candidate brings back.
+
+    Every mode enters the candidate's fit; those the current model keeps stay in it (the
+    candidate must carry what the current model carries), and a set-aside mode comes back
+    only when the candidate holds it inside the current model's outlier limit with all of
+    them in the fit — a candidate cannot buy a mode back by bending the others."""
+    current, opt = trial.current, trial.opt
+    kept = set(current.kept)
+    rc = robust_fit(testimony(current), p0, fo, alpha=opt.alpha, scale=current.scale, protect=lambda m: m in kept)
+    data = rc.kept
+    cur = current.fit if set(data) == kept else aligned(refit_on(current.fit, data, opt), data)
+    fields, why = judge(rc.fit, cur, list(data), scoring)
+    back = tuple(a.to_dict() for a in current.set_aside if a.mode in set(rc.kept))
+    return Candidate(name=name, reason=why or "passes", passes=why is None, adopted=False, robust=rc,
+                     data=tuple(data), brought_back=back, bounds=scoring.bounds, **fields, **common)
+
+
+def adopt_reason(c: Candidate, runner: Candidate | None) -> str:
+    what = "a parameter value is off" if c.kind == "parameter" else "missing physics"
+    s = (f"adopted ({what}): RMS {c.rms_error_pct:.3f} %, ΔAICc {c.delta_aicc:+.1f}, F-test p = {c.f_p_value:.2g}, "
+         + ", ".join(f"{k} = {v['value']:.4g} ± {v['std_error']:.2g}" for k, v in c.parameters.items()))
+    if c.brought_back:
+        s += "; brings back " + ", ".join(f"n = {b['n']} {b['branch']} at {b['frequency_hz']:.1f} Hz"
+                                          for b in c.brought_back)
+    if runner is not None:
+        s += f"; runner-up {runner.name} (ΔAICc {runner.delta_aicc:+.1f})"
+    return s
+
+
+def choose(cands, current: RobustFit, opt, n_tried, *, needed: bool):
+    """The round's verdicts: the passing candidate with the most evidence over the current
+    model (lowest ΔAICc, each on the modes it was judged on) adopted, the others with the
+    reason they were not.
+
+    Each candidate is judged on the modes either it or the current model keeps; a candidate
+    that brings back a set-aside mode is judged on one mode more. Its ΔAICc is the evidence
+    it has against the current model on its own data, and that is what is compared."""
+    if not needed:
+        return None, [dataclasses.replace(c, reason="not needed: the residual is at the level of the noise"
+                                          + ("" if c.passes else f"; besides, {c.reason}")) for c in cands]
+    passing = [c for c in cands if c.passes]
+    best = min(passing, key=lambda c: c.delta_aicc) if passing else None
+    runner = min((c for c in cands if c is not best and c.delta_aicc is not None), key=lambda c: c.delta_aicc,
+                 default=None)
+    out = []
+    for c in cands:
+        if c is best:
+            out.append(dataclasses.replace(best, adopted=True, reason=adopt_reason(best, runner)))
+        elif c.passes:
+            out.append(dataclasses.replace(c, reason=f"passes, but {best.name} explains more "
+                                                     f"(ΔAICc {c.delta_aicc - best.delta_aicc:+.1f} above it)"))
+        else:
+            out.append(c)
+    return best, out

@@ -1,0 +1,123 @@
+"""The air-cavity candidate: its evidence (an unexplained n = 1 mode in the cavity band) and its fit."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tiremodal_cli.diagnose.options import cavity_band_hz, fit_options, search_start
+from tiremodal_cli.diagnose.refit import Scoring, Trial, aligned, judge, refit_on, restrict, testimony
+from tiremodal_cli.diagnose.result import Candidate, no_evidence
+from tiremodal_cli.diagnose.statistics import weighted_rss
+from tiremodal_cli.tyre.frequencies import model_frequencies
+from tiremodal_cli.tyre.measured import MeasuredMode
+from tiremodal_cli.tyre.robust import RobustFit, robust_fit
+
+__all__ = ["CavitySpec", "try_cavity"]
+
+
+@dataclass(frozen=True)
+class CavitySpec:
+    """The cavity effect's set-up on top of the current model: effects with their fixed
+    values, the free (effect, parameter) pairs, bounds and names of the fitted parameters,
+    and the free structural parameters."""
+
+    effects: dict
+    efree: tuple
+    bounds: dict
+    pnames: list
+    struct_free: tuple
+
+
+def _modes_for_cavity(modes, cav, opt):
+    """The structural modes once ``cav`` is the cavity mode: drop it where it was kept as
+    n = 1 and let the row it had displaced (an n = 1 duplicate) take its place."""
+    f_c = cav["frequency_hz"]
+    kept = [m for m in modes if not (m.n == 1 and m.branch != "cavity" and abs(m.frequency_hz - f_c) <= 1e-9 * f_c)]
+    if len(kept) == len(modes):
+        return kept, None
+    b = next(m.branch for m in modes if m.n == 1 and abs(m.frequency_hz - f_c) <= 1e-9 * f_c)
+    alt = cav.get("displaced")
+    if alt is not None:
+        kept.append(MeasuredMode(1, b, alt, source="n = 1 row displaced by the cavity mode",
+                                 uncertainty_hz=alt * opt.noise_floor_pct / 100))
+    return kept, b
+
+
+def _cavity_evidence(current: RobustFit, extra, opt) -> list[dict]:
+    """Modes that may be the cavity's: an n = 1 pattern in the cavity band that fits no
+    structural (n, branch) — or the n = 1 row kept, when the unexplained one is the structure's."""
+    lo, hi = cavity_band_hz(current.fit.parameters.R, opt)
+    cands = []
+    for u in extra:
+        n_ok = u.get("n") == 1 or (u.get("n_spatial") is not None and int(u["n_spatial"]) == 1)
+        if n_ok and lo <= u["frequency_hz"] <= hi:
+            cands.append({"frequency_hz": u["frequency_hz"], "displaced": None, "row": u.get("row")})
+            for m in current.modes:
+                if m.n == 1 and m.branch == u.get("branch") and lo <= m.frequency_hz <= hi:
+                    cands.append({"frequency_hz": m.frequency_hz, "displaced": u["frequency_hz"], "row": None})
+    return cands
+
+
+def _ordered_union(first, *others):
+    seen, out = set(), []
+    for group in (first, *others):
+        for m in group:
+            if m not in seen:
+                seen.add(m)
+                out.append(m)
+    return tuple(out)
+
+
+def try_cavity(name, spec: CavitySpec, trial: Trial, common: dict) -> Candidate:
+    """The air cavity: a mode with an n = 1 tread pattern in the cavity band that fits no
+    structural (n, branch) (or that displaced the structural n = 1 from its label)."""
+    current, opt = trial.current, trial.opt
+    lo, hi = cavity_band_hz(current.fit.parameters.R, opt)
+    cands = _cavity_evidence(current, trial.extra, opt)
+    if not cands:
+        return no_evidence(name, f"no evidence: no unexplained n = 1 mode in the cavity band {lo:.0f}–{hi:.0f} Hz",
+                           common)
+    _, cav, rc, struct, cav_mode = min((_cavity_fit(name, spec, cav, current, opt) for cav in cands),
+                                       key=lambda t: t[0])
+    kept_struct = [m for m in rc.kept if m.branch != "cavity"]
+    # judged on the structural modes either model keeps, plus the cavity mode as one more point
+    data = _ordered_union([m for m in current.kept if m in set(struct)], kept_struct)
+    cand_all = aligned(refit_on(rc.fit, list(data) + [cav_mode], opt), list(data) + [cav_mode])
+    cav_err = cand_all.modes[-1]
+    cur_on = aligned(refit_on(current.fit, data, opt), data)
+    f_c = cav["frequency_hz"]
+    near = model_frequencies(cur_on.parameters, [1, 1], ["same", "opposite"], cur_on.effects or None)
+    e0 = float(np.nanmin(np.abs(near / f_c - 1))) / (opt.noise_floor_pct / 100)
+    e1 = cav_err["error_pct"] / opt.noise_floor_pct
+    missing = (None if abs(cav_err["error_pct"]) <= 3 * opt.noise_floor_pct else
+               f"the model's cavity mode misses the measured one by {cav_err['error_pct']:+.2f} %")
+    fields, why = judge(restrict(cand_all, len(data)), cur_on, list(data),
+                        Scoring(tuple(spec.pnames), spec.bounds, opt, trial.n_tried),
+                        missing_evidence=missing, extra_point=(e0, e1))
+    fields["fit"] = cand_all
+    cavity_mode = {"frequency_hz": cav["frequency_hz"], "n": 1, "model_hz": cav_err["model_hz"],
+                   "displaced": cav["displaced"], "band_hz": [lo, hi]}
+    back = tuple(a.to_dict() for a in current.set_aside if a.mode in set(kept_struct))
+    return Candidate(name=name, reason=why or "passes", passes=why is None, adopted=False, cavity_mode=cavity_mode,
+                     robust=rc, data=tuple(data), brought_back=back, bounds=spec.bounds, **fields, **common)
+
+
+def _cavity_fit(name, spec: CavitySpec, cav: dict, current: RobustFit, opt):
+    """The robust fit with ``cav`` as the cavity mode; returns (score, cav, fit, structural
+    modes, cavity mode), the score being the kept structural modes' χ² less their number."""
+    cur = current.fit
+    struct, _ = _modes_for_cavity(testimony(current), cav, opt)
+    cav_mode = MeasuredMode(1, "cavity", cav["frequency_hz"], source="cavity mode",
+                            uncertainty_hz=cav["frequency_hz"] * opt.noise_floor_pct / 100)
+    eff_start = {**spec.effects, name: {**spec.effects[name],
+                                        "f_cavity_hz": float(np.clip(cav["frequency_hz"], 50.0, 400.0))}}
+    fo = fit_options(opt, free=spec.struct_free, effects=eff_start, effect_free=spec.efree,
+                     start={**search_start(cur), **{f"{name}.{k}": v for k, v in eff_start[name].items()}})
+    kept = set(current.kept)
+    rc = robust_fit(struct + [cav_mode], cur.parameters, fo, alpha=opt.alpha,
+                    protect=lambda m: m.branch == "cavity" or m in kept, scale=current.scale)
+    kept_struct = [m for m in rc.kept if m.branch != "cavity"]
+    score = weighted_rss(restrict(aligned(rc.fit, rc.kept), len(kept_struct)), kept_struct) - len(kept_struct)
+    return score, cav, rc, struct, cav_mode
