@@ -6,8 +6,8 @@ from types import SimpleNamespace
 import pytest
 
 from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
-from tiremodal_cli.tyre.model import TyreParameters
-from tiremodal_cli.workflow.pipeline import NOMINAL_RIM_KG, rim_condition
+from tiremodal_cli.tyre.model import NOMINAL_RIM_KG, TyreParameters
+from tiremodal_cli.workflow.pipeline import rim_condition
 from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 
 

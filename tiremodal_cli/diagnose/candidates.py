@@ -10,6 +10,7 @@ from tiremodal_cli.diagnose.refit import Scoring, Trial, aligned, judge, refit_o
 from tiremodal_cli.diagnose.result import Candidate, no_evidence
 from tiremodal_cli.tyre.effects import get_effect
 from tiremodal_cli.tyre.fit_types import DEFAULT_BOUNDS
+from tiremodal_cli.tyre.model import NOMINAL_RIM_KG
 from tiremodal_cli.tyre.robust import RobustFit, robust_fit
 
 __all__ = ["try_candidate", "adopt_reason", "choose"]
@@ -50,7 +51,7 @@ def _try_parameter(name: str, trial: Trial) -> Candidate:
     fo = dataclasses.replace(fit_options(trial.opt, free=struct_free + (name,), effects=dict(cur.effects),
                                          effect_free=prev_eff_free, start=search_start(cur)), bounds={})
     start = cur.parameters
-    p0 = start if name != "m_w" or start.m_w is not None else start.replace(m_w=1000.0)
+    p0 = start if name != "m_w" or start.m_w is not None else start.replace(m_w=NOMINAL_RIM_KG)
     common = dict(kind="parameter", title=f"nominal {name} is off", round=trial.rnd,
                   signature="a parameter value is off, not missing physics")
     return _judged(name, common, trial, p0, fo, Scoring((name,), {name: (lo, hi)}, trial.opt, trial.n_tried))

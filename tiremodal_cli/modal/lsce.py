@@ -30,6 +30,7 @@ Analysis*, ch. 4.
 from __future__ import annotations
 
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -219,8 +220,8 @@ def _companion(alpha):
     return C
 
 
-def sweep_poly(irf, orders, dt: float, f_lo: float, width_hz: float, *, max_rows: int | None = None
-               ) -> list[OrderPoles]:
+def sweep_poly(irf, orders, dt: float, f_lo: float, width_hz: float, *, max_rows: int | None = None,
+               workers: int = 1) -> list[OrderPoles]:
     """Poly-reference LSCE (Vold et al. 1982): matrix autoregression over several references.
 
     ``irf`` (n_out, n_ref, L): impulse responses from every reference to every output.
@@ -229,6 +230,9 @@ def sweep_poly(irf, orders, dt: float, f_lo: float, width_hz: float, *, max_rows
     participation L, so p orders give p·n_ref poles and a root of multiplicity up to n_ref
     — the two members of a split pair — is resolved. As in :func:`sweep`, the normal
     matrix is built once for the highest order and each order uses its leading block.
+
+    ``workers`` > 1 solves the orders in that many threads (LAPACK releases the GIL; each
+    order is computed exactly as alone, so the poles are the same to the bit).
     """
     h = np.asarray(irf)
     n_out, n_ref, L = h.shape
@@ -242,30 +246,41 @@ def sweep_poly(irf, orders, dt: float, f_lo: float, width_hz: float, *, max_rows
     win = np.lib.stride_tricks.sliding_window_view(h, p_max + 1, axis=-1)[:, :, :last + 1]  # (o, r, m, k)
     X = win.transpose(0, 2, 3, 1).reshape(n_out * (last + 1), (p_max + 1) * n_ref)
     R = X.conj().T @ X
-    out = []
-    for p in orders:
-        a, b = p * n_ref, (p + 1) * n_ref
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-            try:
-                W = scipy.linalg.solve(R[:a, :a], -R[:a, a:b], assume_a="her")
-            except (scipy.linalg.LinAlgError, ValueError):
-                W = scipy.linalg.lstsq(R[:a, :a], -R[:a, a:b], lapack_driver="gelsy")[0]
-        # L (z^p I + Σ z^k W_k) = 0: eigenvalues of the block companion of A_k = W_kᵀ
-        A = [W[k * n_ref:(k + 1) * n_ref].T for k in range(p)]
-        C = np.zeros((a, a), dtype=complex)
-        for k in range(p):
-            C[:n_ref, k * n_ref:(k + 1) * n_ref] = -A[p - 1 - k]
-        if p > 1:
-            C[n_ref:, :-n_ref] = np.eye(a - n_ref)
-        z, V = np.linalg.eig(C)
-        keep = np.abs(z) > 0
-        z = z[keep]
-        part = V[-n_ref:, keep].T  # the companion eigenvector's last block is the participation L
-        part = part / np.maximum(np.linalg.norm(part, axis=1, keepdims=True), np.finfo(float).tiny)
-        lnz = np.log(z)
-        f_off = np.mod(lnz.imag / (2 * np.pi * dt), width_hz)
-        s = lnz.real / dt + 1j * 2 * np.pi * (f_lo + f_off)
-        fn, zeta = poles_to_modal(s)
-        out.append(OrderPoles(p, s, z, fn, zeta, part))
-    return out
+
+    def one(p):
+        return _poly_order(R, p, n_ref, dt, f_lo, width_hz)
+
+    with warnings.catch_warnings():
+        # orders above the data's rank are ill-conditioned (the filter is process-wide, so
+        # it covers the worker threads, which all finish inside this block)
+        warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+        if workers > 1 and len(orders) > 1:
+            with ThreadPoolExecutor(workers) as ex:
+                return list(ex.map(one, orders))
+        return [one(p) for p in orders]
+
+
+def _poly_order(R, p: int, n_ref: int, dt: float, f_lo: float, width_hz: float) -> OrderPoles:
+    """The poles and participation factors of order ``p`` from the normal matrix ``R``."""
+    a, b = p * n_ref, (p + 1) * n_ref
+    try:
+        W = scipy.linalg.solve(R[:a, :a], -R[:a, a:b], assume_a="her")
+    except (scipy.linalg.LinAlgError, ValueError):
+        W = scipy.linalg.lstsq(R[:a, :a], -R[:a, a:b], lapack_driver="gelsy")[0]
+    # L (z^p I + Σ z^k W_k) = 0: eigenvalues of the block companion of A_k = W_kᵀ
+    A = [W[k * n_ref:(k + 1) * n_ref].T for k in range(p)]
+    C = np.zeros((a, a), dtype=complex)
+    for k in range(p):
+        C[:n_ref, k * n_ref:(k + 1) * n_ref] = -A[p - 1 - k]
+    if p > 1:
+        C[n_ref:, :-n_ref] = np.eye(a - n_ref)
+    z, V = np.linalg.eig(C)
+    keep = np.abs(z) > 0
+    z = z[keep]
+    part = V[-n_ref:, keep].T  # the companion eigenvector's last block is the participation L
+    part = part / np.maximum(np.linalg.norm(part, axis=1, keepdims=True), np.finfo(float).tiny)
+    lnz = np.log(z)
+    f_off = np.mod(lnz.imag / (2 * np.pi * dt), width_hz)
+    s = lnz.real / dt + 1j * 2 * np.pi * (f_lo + f_off)
+    fn, zeta = poles_to_modal(s)
+    return OrderPoles(p, s, z, fn, zeta, part)

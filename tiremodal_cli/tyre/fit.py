@@ -28,7 +28,7 @@ from tiremodal_cli.tyre.evaluate import Evaluator, apply_parameters, jacobian, s
 from tiremodal_cli.tyre.fit_types import FitOptions, FitResult
 from tiremodal_cli.tyre.frequencies import model_frequencies
 from tiremodal_cli.tyre.measured import MeasuredMode
-from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.model import NOMINAL_RIM_KG, TyreParameters
 
 __all__ = ['fit']
 
@@ -62,7 +62,7 @@ def _checked(modes, base: TyreParameters, opt: FitOptions):
     if opt.weights not in ("relative", "uncertainty"):
         raise ParameterError(f"weights={opt.weights!r}; allowed: relative, uncertainty")
     if "m_w" in opt.free and base.m_w is None:
-        base = dataclasses.replace(base, m_w=1000.0)
+        base = dataclasses.replace(base, m_w=NOMINAL_RIM_KG)
     return names, logb, base
 
 

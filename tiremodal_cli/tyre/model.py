@@ -25,8 +25,13 @@ from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.names import PARAMETERS
 from tiremodal_cli.tyre.effects import Block
 
-__all__ = ['FRF_FORMS', 'TyreParameters', 'PAPER_PARAMETERS', 'block', 'closed_form_hz', 'stacked_blocks', 'pair_eigenvalues', 'paper_damping', 'branch_label', 'eig_pairs', 'solve_block', 'dof_list', 'generalised_length', 'fixed_point_hz']
+__all__ = ['NOMINAL_RIM_KG', 'FRF_FORMS', 'TyreParameters', 'PAPER_PARAMETERS', 'block', 'closed_form_hz', 'stacked_blocks', 'pair_eigenvalues', 'paper_damping', 'branch_label', 'eig_pairs', 'solve_block', 'dof_list', 'generalised_length', 'fixed_point_hz']
 
+
+#: Rim (plus hub and fixture) mass assumed when a rim channel shows the rim moving and the
+#: nominal parameters give none, kg. The paper gives none; ``diagnose`` tests m_w as a
+#: parameter that may be off, so this is a starting value, not a result.
+NOMINAL_RIM_KG = 1000.0
 
 FRF_FORMS = ("receptance", "mobility", "accelerance")
 

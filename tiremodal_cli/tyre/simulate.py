@@ -19,7 +19,7 @@ import scipy.signal
 from tiremodal_cli import __version__
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.io.measurement import Measurement
-from tiremodal_cli.tyre.model import TyreParameters, paper_damping
+from tiremodal_cli.tyre.model import NOMINAL_RIM_KG, TyreParameters, paper_damping
 from tiremodal_cli.tyre.solve import ModalModel, frf, observation, solve_modes
 from tiremodal_cli.tyre.ring import RingModes, elements_for, ring_frf, ring_modes, ring_observation
 from tiremodal_cli.tyre.ring_parameters import RingParameters
@@ -365,7 +365,7 @@ def _truth(cfg, listed, angles, keep, hits, modes) -> dict:
 
 #: The sample's test set-up (``sample_data/gl073a_sim.toml``) without its faults: 34 points,
 #: 2 hits, 1 s records at 1,024 Hz, 0.5 % noise, a 2 ms pulse.
-CAMPAIGN_CONFIG = SimulationConfig(params=TyreParameters(m_w=1000.0), n_hits=2, sample_rate=1024.0,
+CAMPAIGN_CONFIG = SimulationConfig(params=TyreParameters(m_w=NOMINAL_RIM_KG), n_hits=2, sample_rate=1024.0,
                                    n_samples=1024, pulse_width_s=0.002, noise=0.005)
 
 

@@ -29,19 +29,13 @@ from tiremodal_cli.io.modalfile import to_csv, to_rows, write_modal
 from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
 from tiremodal_cli.tyre.flexible_tread import errors_by_branch, fit_flexible_tread
 from tiremodal_cli.tyre.measured import modes_from_rows
-from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.model import NOMINAL_RIM_KG, TyreParameters
 from tiremodal_cli.tyre.predict import fit_report, predict_table
 from tiremodal_cli.tyre.sensitivity import PAPER_STUDY, coefficients
 from tiremodal_cli.workflow.manifest import files_sha256, provenance
 from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions, json_text
 
-__all__ = ['run', 'rim_condition', 'rim_state', 'read_uff_test', 'NOMINAL_RIM_KG']
-
-
-#: Rim (plus hub and fixture) mass assumed when a rim channel shows the rim moving and the
-#: nominal parameters give none, kg. The paper gives none; ``diagnose`` tests m_w as a
-#: parameter that may be off, so this is a starting value, not a result.
-NOMINAL_RIM_KG = 1000.0
+__all__ = ['run', 'rim_condition', 'rim_state', 'read_uff_test']
 
 
 def rim_condition(r, params: TyreParameters) -> tuple[TyreParameters, str]:
