@@ -47,7 +47,7 @@ from tiremodal_cli.io.frffile import uff_function_types
 from tiremodal_cli.io.ingest import read_source
 from tiremodal_cli.io.ingest.uff import uff_files
 from tiremodal_cli.io.measurement import write_measurement
-from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.model import NOMINAL_RIM_KG, TyreParameters
 from tiremodal_cli.workflow.discovery import BatchTest, discover, source_sha256
 from tiremodal_cli.workflow.executors import SerialExecutor, executor
 from tiremodal_cli.workflow.manifest import is_complete, read_manifest
@@ -74,7 +74,7 @@ class BatchConfig:
     """
 
     run: RunOptions = field(default_factory=RunOptions)
-    params: TyreParameters = field(default_factory=lambda: TyreParameters(m_w=1000.0))
+    params: TyreParameters = field(default_factory=lambda: TyreParameters(m_w=NOMINAL_RIM_KG))
     mapping: str = "mapping.toml"
 
 
@@ -109,7 +109,7 @@ def load_config(path=None, *, run_overrides: dict | None = None, param_overrides
             raise ParameterError(f"{where}: {t} = {data[t]!r} is not a table; allowed: a [{t}] table")
     run_d = {**dict(data.get("run", {})), **(run_overrides or {})}
     opt = RunOptions.from_mapping(run_d, f"{where} [run]")
-    par = {"m_w": 1000.0, **dict(data.get("params", {})), **(param_overrides or {})}
+    par = {"m_w": NOMINAL_RIM_KG, **dict(data.get("params", {})), **(param_overrides or {})}
     try:
         params = TyreParameters.from_mapping(par)
     except TiremodalError as exc:
