@@ -4,8 +4,8 @@
     python benchmarks/validation.py --jobs 2 --out results.jsonl
     python benchmarks/validation.py --only ring:reference --only paper:reference --no-docs
 
-Cases and scoring rules: tiremodal_cli/validation.py (and docs/validation.md). Every case is
-seeded; the same commit on the same machine gives the same scorecard (timings aside).
+Cases: tiremodal_cli/workflow/validation.py; scoring rules: workflow/validation_scoring.py
+(and docs/validation.md). Every case is seeded; the same commit on the same machine gives the same scorecard (timings aside).
 Prints one scorecard table (stdout), writes every record as JSON lines (``--out``), and
 rewrites docs/validation.md with the table, the datasheet, the machine and the date.
 """
@@ -26,16 +26,16 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from tiremodal_cli.modal.modes import SAME_POLE_FLOOR_BW  # noqa: E402
 from tiremodal_cli.workflow.validation import FACTORS, REFERENCE, Case, matrix, run_case  # noqa: E402
 
 
 def _one(case_dict: dict, keep: str | None) -> dict:
-    from threadpoolctl import threadpool_limits
-
     case = Case(**case_dict)
     with threadpool_limits(1):
         if keep:
@@ -146,8 +146,6 @@ def datasheet(records: list[dict]) -> str:
                "(`modes.SAME_POLE_FLOOR_BW`).\n")
     out.append("| generator | modes found | median | 99th percentile | largest | share above the floor |")
     out.append("|---|---|---|---|---|---|")
-    from tiremodal_cli.modal.modes import SAME_POLE_FLOOR_BW
-
     for g in sorted({r["case"]["generator"] for r in ok}):
         e = np.array([x for r in ok if r["case"]["generator"] == g for x in r.get("freq_err_bw", [])])
         if e.size:
@@ -190,12 +188,12 @@ with its defaults (only the FRF form varies, as `RunOptions.form`), and scores t
 against the generator's truth. Two generators: **paper** — the paper's model and its
 effects (`tiremodal simulate`), the model the estimator and the diagnosis are built on;
 **ring** — the independent finite-element tyre (`tiremodal simulate --model ring`,
-`tiremodal_cli/ring.py`), which shares no code with them. The **reference** test: 2,048 Hz,
+`tiremodal_cli/tyre/ring.py`), which shares no code with them. The **reference** test: 2,048 Hz,
 2 s records, 34 points, 3 hits, 0.5 % noise, accelerance, no faults, no extra physics (the
 ring's default is the paper's model as a limit of the ring; a clamped rim). Every other case
 changes one factor, or a seeded random combination of them.
 
-**Scoring** (`tiremodal_cli/validation.py`): a truth mode is *expected* when its half-power
+**Scoring** (`tiremodal_cli/workflow/validation_scoring.py`): a truth mode is *expected* when its half-power
 band lies in the usable band (f (1 + ζ) ≤ fs/2.56 — a mode with a flank cut off by the band's
 top is fitted to one flank, and `lsce` rejects it — and the hammer's force within 20 dB of its
 low-frequency level),
@@ -209,7 +207,7 @@ frequency matches, *missed* otherwise. A table mode with no truth mode of any ki
 table to truth leaves over are *surplus* (one mode reported twice). The diagnosis is *right*
 when every effect of the case has one of its
 required names adopted and nothing else is adopted but names the case's physics allows
-(`EXPECTED_DIAGNOSIS` in `tiremodal_cli/validation.py`: e.g. the ring's tangential belt
+(`EXPECTED_DIAGNOSIS` in `tiremodal_cli/workflow/validation_scoring.py`: e.g. the ring's tangential belt
 also stretches, so a hoop stiffness on n = 0 may be adopted beside the tangential
 coupling); nothing for "none". An effect is *detectable* when the paper's model, fitted
 robustly to the case's expected truth modes with the diagnosis's 0.1 % uncertainty, leaves a

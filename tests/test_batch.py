@@ -24,9 +24,10 @@ import h5py
 import numpy as np
 import pytest
 
-from tiremodal_cli.workflow.batch import (BatchConfig, BatchTest, discover, load_config, read_summary, run_batch,
-                                 source_sha256)
-from tiremodal_cli.cli.simulate import _toml
+from tiremodal_cli.workflow.batch import BatchConfig, load_config, run_batch
+from tiremodal_cli.workflow.discovery import BatchTest, discover, source_sha256
+from tiremodal_cli.workflow.summary import read_summary
+from tiremodal_cli.cli.simulate import mapping_toml
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.io.ingest.uff import write_uff_time
 from tiremodal_cli.io.measurement import write_measurement
@@ -70,7 +71,7 @@ def make_tree(root: Path) -> Path:
     m = simulate(dataclasses.replace(CAMPAIGN_CONFIG, seed=300)).measurement
     _, mapping = write_uff_time(tree / "uff_test", m)
     (tree / "uff_test" / "mapping.toml").write_text(
-        _toml(mapping) + '\n[test]\ntire = "GL073A, UFF export"\ninflation_pressure = 8.0e5\n')
+        mapping_toml(mapping) + '\n[test]\ntire = "GL073A, UFF export"\ninflation_pressure = 8.0e5\n')
     _write_csv_folder(tree / "csv_test", simulate(dataclasses.replace(CAMPAIGN_CONFIG, seed=400)).measurement)
     bad = tree / "bad"
     good = simulate(dataclasses.replace(CAMPAIGN_CONFIG, seed=500)).measurement

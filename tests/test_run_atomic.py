@@ -158,13 +158,13 @@ def test_report_refuses_a_mixed_folder(measured, tmp_path):
 def test_report_of_a_run_with_a_dead_channel(measured):
     """Every default simulated test has a dead rim channel: its rejection has no point/hit;
     the report's rejection table shows it as 'all' (it raised TypeError before)."""
-    from tiremodal_cli.workflow.report import FIGURES, _load_json, _run_body
+    from tiremodal_cli.workflow.run_page import FIGURES, run_body
 
     meas, old = measured
     man = json.loads((old / MANIFEST).read_text())
     assert any(x["point"] is None for x in man["summary"]["rejected_hits"])
-    body = _run_body(old, man, _load_json(old / "identify.json"), _load_json(old / "diagnosis.json"),
-                     {stem: b"" for stem, _ in FIGURES})
+    body = run_body(old, man, json.loads((old / "identify.json").read_text()),
+                    json.loads((old / "diagnosis.json").read_text()), {stem: b"" for stem, _ in FIGURES})
     assert ">all<" in body
 
 

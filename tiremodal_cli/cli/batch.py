@@ -9,7 +9,8 @@ from pathlib import Path
 
 import click
 
-from tiremodal_cli.workflow.batch import SUMMARY_CSV, SUMMARY_JSONL, load_config, run_batch
+from tiremodal_cli.workflow.batch import load_config, run_batch
+from tiremodal_cli.workflow.summary import SUMMARY_CSV, SUMMARY_JSONL
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import FiniteRange, band_option, echo_json, json_option, parse_key_values
 

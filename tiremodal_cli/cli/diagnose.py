@@ -8,10 +8,13 @@ import click
 
 from tiremodal_cli.diagnose.loop import DiagnoseOptions, diagnose, report
 from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
+from tiremodal_cli.io.modalfile import read_modal
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.errors import DataFormatError
+from tiremodal_cli.tyre.measured import modes_from_rows
 from tiremodal_cli.cli.options import (FiniteRange, PlotPath, Progress, dumps, echo_json, json_option, load_params, no_usable_modes,
                       overwrite_option, params_options, read_table_rows)
+# Start-up: matplotlib (tiremodal_cli.plots) is imported inside the command, only when a figure is asked for.
 
 
 def human(rep: dict) -> str:
@@ -77,7 +80,6 @@ def diagnose_cmd(modes_file, params_file, param_items, free, candidates, noise_f
                           candidates=tuple(x.strip() for x in candidates.split(",")) if candidates else None,
                           noise_floor_pct=noise_floor_pct, alpha=alpha, max_effects=max_effects, seed=seed)
     rows, n_points = _rows_and_points(modes_file)
-    from tiremodal_cli.tyre.measured import modes_from_rows
     usable, skipped = modes_from_rows(rows, min_confidence=min_confidence, split_pairs="members")
     if not usable:
         raise DataFormatError(no_usable_modes(modes_file, rows, skipped))
@@ -104,6 +106,4 @@ def _rows_and_points(path: Path):
     rows = read_table_rows(path)
     if path.suffix.lower() == ".csv":
         return rows, None
-    from tiremodal_cli.io.modalfile import read_modal
-
     return rows, int(read_modal(path).point_angle.size)

@@ -14,6 +14,7 @@ from tiremodal_cli.io.frffile import describe_frf, write_frf, write_frf_uff
 from tiremodal_cli.io.measurement import open_measurement
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option
+# Start-up: matplotlib (tiremodal_cli.plots) is imported inside the command, only when a figure is asked for.
 
 
 def _check_windows(m, force_window_s, exp_tau_s, exp_end=None) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import click
@@ -13,14 +14,16 @@ from tiremodal_cli.tyre.fit_types import PAPER_GA, FitOptions
 from tiremodal_cli.tyre.measured import modes_from_rows
 from tiremodal_cli.tyre.predict import fit_report, predict_table
 from tiremodal_cli.tyre.robust import robust_fit, with_sigma
+from tiremodal_cli.cli.main import cli
+from tiremodal_cli.errors import DataFormatError
+from tiremodal_cli.cli.options import (FiniteRange, PlotPath, Progress, echo_json, json_option, load_params, no_usable_modes,
+                      overwrite_option, params_options, read_table_rows)
+from tiremodal_cli.workflow.summary import rows_to_csv
+# Start-up: matplotlib (tiremodal_cli.plots) is imported inside the command, only when a figure is asked for.
 
 #: Floor of a measured frequency's relative uncertainty for the screen, % (diagnose's:
 #: the repeatability of an impact test's frequencies)
 NOISE_FLOOR_PCT = 0.1
-from tiremodal_cli.cli.main import cli
-from tiremodal_cli.errors import DataFormatError
-from tiremodal_cli.cli.options import (FiniteRange, PlotPath, Progress, echo_json, json_option, load_params, no_usable_modes,
-                      overwrite_option, params_options, read_table_rows, rows_to_csv)
 
 
 #: Upper bounds of the search's size. Each member of each generation is one model solve
@@ -101,8 +104,6 @@ def identify_cmd(modes_file, params_file, param_items, free, bounds, weights, se
     base, effects = load_params(params_file, param_items)
     opt = fit_options(free, bounds, weights, seed, paper_ga, population, generations)
     if effects:
-        from dataclasses import replace
-
         opt = replace(opt, effects=effects)
     rows = read_table_rows(modes_file)
     modes, skipped = modes_from_rows(rows, min_confidence=min_confidence, source=str(modes_file))

@@ -5,6 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+import numpy as np
+import pyuff
 
 from tiremodal_cli.io import frffile, measurement, modalfile
 from tiremodal_cli.errors import DataFormatError
@@ -60,9 +62,6 @@ def info_cmd(file, as_json):
 
 def _describe_uff(path) -> dict:
     """A UFF file: FRFs as ``run`` reads them, else its time records counted."""
-    import numpy as np
-    import pyuff
-
     if 4 in frffile.uff_function_types([path]):
         return frffile.describe_frf_uff(path)
     sets = pyuff.UFF(str(path)).read_sets()

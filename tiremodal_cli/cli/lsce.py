@@ -15,6 +15,7 @@ from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
 from tiremodal_cli.modal.stabilization import StabilizationOptions
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option
+# Start-up: matplotlib (tiremodal_cli.plots) is imported inside the command, only when a figure is asked for.
 
 
 def read_any_frf(path: Path, mapping=None):

@@ -4,13 +4,21 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import sys
 from pathlib import Path
 
 import click
 
+from tiremodal_cli.errors import DataFormatError
+from tiremodal_cli.io.config import load_mapping
 from tiremodal_cli.io.files import dumps  # noqa: F401  (re-exported for the commands)
+from tiremodal_cli.io.measurement import file_format
+from tiremodal_cli.io.modalfile import FORMAT_NAME, read_modal, read_modal_csv, to_rows
 from tiremodal_cli.io.modalfile import no_usable_modes  # noqa: F401  (re-exported for the commands)
+
+# Start-up: every command imports this module, so what only some need is imported inside the
+# function that needs it (the tyre model and scipy, matplotlib).
 
 overwrite_option = click.option("--overwrite", is_flag=True,
                                 help="Replace existing outputs (refused otherwise).")
@@ -111,7 +119,6 @@ def params_options(f):
 
 def load_params(params_file, param_items):
     """TyreParameters from a file (its [params] table, or the top level) and NAME=VALUE items."""
-    from tiremodal_cli.io.config import load_mapping
     from tiremodal_cli.tyre.model import TyreParameters
 
     base = {}
@@ -126,30 +133,13 @@ def load_params(params_file, param_items):
 
 def read_table_rows(path: Path):
     """Modal-table rows from a modal file (``lsce``) or a CSV with frequency_hz, n, branch."""
-    from tiremodal_cli.io.measurement import file_format
-    from tiremodal_cli.io.modalfile import FORMAT_NAME, read_modal, read_modal_csv, to_rows
-
     path = Path(path)
     if path.suffix.lower() == ".csv":
         return read_modal_csv(path)
     fmt = file_format(path)
     if fmt != FORMAT_NAME:
-        from tiremodal_cli.errors import DataFormatError
-
         raise DataFormatError(f"{path}: format {fmt!r} is not a modal file or CSV; run 'tiremodal lsce' first")
     return to_rows(read_modal(path))
-
-
-def rows_to_csv(rows, fieldnames=None) -> str:
-    """CSV text of a list of dicts (header from the first row unless given)."""
-    import csv
-    import io
-
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(fieldnames or rows[0]), lineterminator="\n", extrasaction="ignore")
-    w.writeheader()
-    w.writerows(rows)
-    return buf.getvalue()
 
 
 class FiniteRange(click.FloatRange):
@@ -158,8 +148,6 @@ class FiniteRange(click.FloatRange):
     name = "float"
 
     def convert(self, value, param, ctx):
-        import math
-
         rv = super().convert(value, param, ctx)
         if not math.isfinite(rv):
             self.fail(f"{value!r} is not a finite number", param, ctx)
@@ -195,8 +183,6 @@ def band_option(help_text: str, **kw):
     def check(ctx, param, value):
         if not value:
             return value
-        import math
-
         lo, hi = value
         if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
             raise click.BadParameter(f"{lo:g} {hi:g}: allowed: finite 0 ≤ LO < HI (Hz)", ctx, param)

@@ -8,10 +8,15 @@ import click
 import numpy as np
 
 from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
+from tiremodal_cli.io.frffile import read_frf
+from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.tyre.model import paper_damping
+from tiremodal_cli.tyre.solve import frf as model_frf
 from tiremodal_cli.tyre.solve import solve_modes
 from tiremodal_cli.cli.main import cli
-from tiremodal_cli.cli.options import FiniteRange, PlotPath, echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
+from tiremodal_cli.cli.options import FiniteRange, PlotPath, echo_json, json_option, load_params, overwrite_option, params_options
+from tiremodal_cli.workflow.summary import rows_to_csv
+# Start-up: matplotlib (tiremodal_cli.plots) is imported inside the functions, only when a figure is asked for.
 
 
 @cli.command("predict", epilog="\b\nExample:\n  tiremodal predict --n-max 12 --csv predicted.csv")
@@ -60,9 +65,6 @@ def predict_cmd(params_file, param_items, n_max, csv_out, plot_out, compare_frf,
 
 def _compare(p, effects, frf_path, out, point, damping, overwrite):
     """Model FRFs at the test's geometry over the measured ones, for every live channel."""
-    from tiremodal_cli.errors import DataFormatError
-    from tiremodal_cli.io.frffile import read_frf
-    from tiremodal_cli.tyre.solve import frf as model_frf
     from tiremodal_cli.plots import plot_synthesis, save_figure
 
     r = read_frf(frf_path)

@@ -8,6 +8,8 @@ import click
 
 from tiremodal_cli.errors import OutputExistsError
 from tiremodal_cli.io.files import refuse_input_as_output
+from tiremodal_cli.io.frffile import is_uff
+from tiremodal_cli.tyre.model import NOMINAL_RIM_KG
 from tiremodal_cli.workflow.run_folder import run_folder
 from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions
 from tiremodal_cli.cli.main import cli
@@ -54,11 +56,9 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
         raise click.BadParameter("run finds the effects itself: a params file holds no [effects] here",
                                  param_hint="--params")
     if "m_w" not in {p.split("=", 1)[0].strip() for p in param_items if "=" in p} and not params_file:
-        base = base.replace(m_w=1000.0)
+        base = base.replace(m_w=NOMINAL_RIM_KG)
     opt = RunOptions(band=tuple(band) if band else None, exp_end=None if no_exp_window else exp_end, seed=seed,
                      noise_floor_pct=noise_floor_pct, max_effects=max_effects, pressure_from_file=not p0_from_params)
-    from tiremodal_cli.io.frffile import is_uff
-
     bar = StageProgress("run", ["read FRFs" if is_uff(measurement) else "frf", "lsce", "identify", "diagnose"])
     try:
         summary = run_folder(measurement, outdir, opt, params=base, overwrite=overwrite, progress=bar,

@@ -11,7 +11,9 @@ import click
 from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
 from tiremodal_cli.tyre.sensitivity import PAPER_STUDY, coefficients, single_variable
 from tiremodal_cli.cli.main import cli
-from tiremodal_cli.cli.options import PlotPath, echo_json, json_option, load_params, overwrite_option, params_options, rows_to_csv
+from tiremodal_cli.cli.options import PlotPath, echo_json, json_option, load_params, overwrite_option, params_options
+from tiremodal_cli.workflow.summary import rows_to_csv
+# Start-up: matplotlib (tiremodal_cli.plots) is imported inside the command, only when a figure is asked for.
 
 
 @cli.command("sensitivity", epilog="\b\nExample:\n  tiremodal sensitivity --n-max 10")

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+import math
+import typing
 from pathlib import Path
 
 import click
@@ -15,6 +17,7 @@ from tiremodal_cli.io.files import atomic_path, check_overwrite, check_size, ref
 from tiremodal_cli.io.ingest.uff import write_uff_time
 from tiremodal_cli.io.measurement import write_measurement
 from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.ring import elements_for
 from tiremodal_cli.tyre.ring_parameters import RING_VARIANTS, RingParameters
 from tiremodal_cli.tyre.simulate import MODELS, Channel, Faults, SimulationConfig, simulate
 from tiremodal_cli.cli.main import cli
@@ -56,9 +59,6 @@ def _typed_scalars(scal: dict, where: str) -> dict:
     """The config file's scalars checked against SimulationConfig's field types: an int field
     takes an integer (not a bool), a float field a finite number, a str field text, a bool
     field true/false; None where the default is None (damping)."""
-    import math
-    import typing
-
     hints = typing.get_type_hints(SimulationConfig)
     out = {}
     for k, v in scal.items():
@@ -94,8 +94,6 @@ def estimate_bytes(cfg: SimulationConfig) -> float:
     if getattr(cfg, "model", "paper") == "ring":
         # the ring's mesh (refined for every order below 1.25 × Nyquist), ≤ 5 fields on 2 nodes
         # per element; its condensed dense matrices and eigensolver workspace: 3 of n_dof²
-        from tiremodal_cli.tyre.ring import elements_for
-
         ne = max(cfg.ring.n_elements, elements_for(cfg.ring, 0.625 * cfg.sample_rate))
         n_dof = 10.0 * ne
         n_modes = n_dof
@@ -155,7 +153,7 @@ def build_config(config_file, overrides: dict, params: dict, effects: dict, faul
     return SimulationConfig(params=p, effects=eff, faults=flt, channels=chans, **extra, **scal)
 
 
-def _toml(mapping: dict) -> str:
+def mapping_toml(mapping: dict) -> str:
     """The UFF mapping as TOML (two flat tables; no TOML writer in the standard library)."""
     lines = ["# impact points: UFF reference node -> angle in degrees", "[points]"]
     lines += [f'"{k}" = {v!r}' for k, v in mapping["points"].items()]
@@ -233,7 +231,7 @@ def simulate_cmd(output, config_file, model, variant, truth, seed, n_points, n_h
     if uff_dir is not None:
         uff_dir.mkdir(parents=True, exist_ok=True)
         _, mapping = write_uff_time(uff_dir, sim.measurement, overwrite=overwrite)
-        write_text_atomic(uff_dir / "mapping.toml", _toml(mapping), overwrite=overwrite)
+        write_text_atomic(uff_dir / "mapping.toml", mapping_toml(mapping), overwrite=overwrite)
     summary = {"output": str(output), "truth": str(truth), "n_points": sim.measurement.n_points,
                "n_hits": sim.measurement.n_hits, "n_channels": sim.measurement.n_channels,
                "n_samples": sim.measurement.n_samples, "sample_rate": sim.measurement.sample_rate,

@@ -18,53 +18,50 @@ Guarantees
 * Resume: a test is skipped when its folder's manifest (``run.json``) has every output with
   its checksum, the same source checksum (the measurement file, or the test folder's files),
   the same options and the same nominal parameters. ``force`` redoes it.
+
+The steps live in :mod:`~tiremodal_cli.workflow.discovery` (the tests),
+:mod:`~tiremodal_cli.workflow.executors` (where the jobs run) and
+:mod:`~tiremodal_cli.workflow.summary` (the records, CSV and JSON lines); this module
+holds the campaign's configuration, one test's job and the batch itself.
 """
 
 from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
-import hashlib
 import json
 import os
 import shutil
 import tempfile
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from threadpoolctl import threadpool_limits
+
 from tiremodal_cli.errors import DataFormatError, ParameterError, TiremodalError
-from tiremodal_cli.io.files import _UMASK, dumps, install_dir, sha256_file, write_text_atomic
-from tiremodal_cli.io.ingest import test_folder_kind
-from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.io.config import load_mapping
+from tiremodal_cli.io.files import _UMASK, install_dir
+from tiremodal_cli.io.frffile import uff_function_types
+from tiremodal_cli.io.ingest import read_source
+from tiremodal_cli.io.ingest.uff import uff_files
+from tiremodal_cli.io.measurement import write_measurement
+from tiremodal_cli.tyre.model import NOMINAL_RIM_KG, TyreParameters
+from tiremodal_cli.workflow.discovery import BatchTest, discover, source_sha256
+from tiremodal_cli.workflow.executors import SerialExecutor, executor
 from tiremodal_cli.workflow.manifest import is_complete, read_manifest
 from tiremodal_cli.workflow.pipeline import run
 from tiremodal_cli.workflow.run_options import RunOptions
+from tiremodal_cli.workflow.summary import SUMMARY_CSV, SUMMARY_JSONL, read_summary, summary_rows, write_summary
 
 __all__ = ["BatchTest", "Job", "BatchConfig", "discover", "load_config", "plan", "run_one", "executor", "run_batch",
-           "summary_rows", "write_summary", "read_summary", "SUMMARY_CSV", "SUMMARY_JSONL", "PARTIAL"]
+           "summary_rows", "write_summary", "read_summary", "SUMMARY_CSV", "SUMMARY_JSONL", "PARTIAL",
+           "SerialExecutor", "record", "source_sha256"]
 
-SUMMARY_CSV = "summary.csv"
-SUMMARY_JSONL = "summary.jsonl"
 PARTIAL = ".partial"
 LOCK = ".lock"
 WORKERS_LOCK = ".lock.workers"
-MEASUREMENT_SUFFIXES = (".h5", ".hdf5", ".hdf")
-#: tiremodal's own outputs: found under a tree, they are not tests
-_OUTPUT_FORMATS = ("tiremodal.frf", "tiremodal.modal")
-
-
-@dataclass(frozen=True)
-class BatchTest:
-    """One test: a measurement file (kind "measurement") or a UFF/CSV folder (kind "uff"/"csv").
-
-    name : the output folder's name under OUTDIR (the path under its root, "/" → "__")
-    """
-
-    name: str
-    path: Path
-    kind: str
 
 
 @dataclass(frozen=True)
@@ -77,7 +74,7 @@ class BatchConfig:
     """
 
     run: RunOptions = field(default_factory=RunOptions)
-    params: TyreParameters = field(default_factory=lambda: TyreParameters(m_w=1000.0))
+    params: TyreParameters = field(default_factory=lambda: TyreParameters(m_w=NOMINAL_RIM_KG))
     mapping: str = "mapping.toml"
 
 
@@ -92,73 +89,6 @@ class Job:
     source_sha256: str
 
 
-# --------------------------------------------------------------------------- discovery
-
-def _is_output_file(path: Path) -> bool:
-    """True for a readable HDF5 file that tiremodal wrote as a stage output (frf, modal)."""
-    import h5py
-
-    try:
-        with h5py.File(path, "r") as h:
-            fmt = h.attrs.get("format")
-    except OSError:
-        return False  # unreadable: a test that will fail with its reason
-    fmt = fmt.decode() if isinstance(fmt, bytes) else fmt
-    return fmt in _OUTPUT_FORMATS
-
-
-def discover(roots: Sequence, *, exclude: Sequence = ()) -> list[BatchTest]:
-    """Every test under ``roots`` (files or folders), in a stable order.
-
-    A test is a measurement file (``*.h5``, ``*.hdf5``, ``*.hdf``; tiremodal's own FRF and
-    modal files are passed over) or a folder that ``ingest`` reads as one test (``point*.csv``
-    files, or ``*.uff``/``*.unv`` files; its sub-folders are not searched). Hidden folders
-    and the ``exclude`` folders (the batch's own output) are not searched.
-
-    Raises ParameterError when a root does not exist.
-    """
-    roots = [Path(r) for r in roots]
-    excl = {Path(e).resolve() for e in exclude}
-    found: list[tuple[str, Path, str]] = []
-    for root in roots:
-        if not root.exists():
-            raise ParameterError(f"{root}: no such file or folder")
-        if root.is_file():
-            found.append((root.stem, root, "measurement"))
-            continue
-        prefix = [root.resolve().name] if len(roots) > 1 else []
-        for folder, dirs, files in os.walk(root):
-            folder = Path(folder)
-            dirs[:] = sorted(d for d in dirs if not d.startswith(".") and (folder / d).resolve() not in excl)
-            rel = folder.relative_to(root).parts
-            kind = test_folder_kind(folder)
-            if kind is not None:
-                found.append(("__".join(prefix + list(rel)) or root.resolve().name, folder, kind))
-                dirs[:] = []
-                continue
-            for f in sorted(files):
-                p = folder / f
-                if p.suffix.lower() in MEASUREMENT_SUFFIXES and not f.startswith(".") and not _is_output_file(p):
-                    found.append(("__".join(prefix + list(rel) + [p.stem]), p, "measurement"))
-    tests, seen = [], {}
-    for name, path, kind in found:
-        k = seen.get(name, 0)
-        seen[name] = k + 1
-        tests.append(BatchTest(name if k == 0 else f"{name}-{k + 1}", path, kind))
-    return tests
-
-
-def source_sha256(test: BatchTest) -> str:
-    """Checksum of a test's input: the file's SHA-256, or for a folder the SHA-256 of its
-    files' names and checksums (sorted), so any changed, added or removed file counts."""
-    if test.kind == "measurement":
-        return sha256_file(test.path)
-    h = hashlib.sha256()
-    for p in sorted(q for q in test.path.iterdir() if q.is_file() and not q.name.startswith(".")):
-        h.update(f"{p.name}\0{sha256_file(p)}\n".encode())
-    return h.hexdigest()
-
-
 # --------------------------------------------------------------------------- configuration
 
 def load_config(path=None, *, run_overrides: dict | None = None, param_overrides: dict | None = None) -> BatchConfig:
@@ -169,8 +99,6 @@ def load_config(path=None, *, run_overrides: dict | None = None, param_overrides
     ``[ingest]`` (``mapping``: the mapping file's name inside each UFF/CSV test folder).
     Unknown tables or keys are errors (a misspelt option must not pass silently).
     """
-    from tiremodal_cli.io.config import load_mapping
-
     data = load_mapping(path) if path else {}
     where = str(path) if path else "options"
     unknown = sorted(set(data) - {"run", "params", "ingest"})
@@ -181,7 +109,7 @@ def load_config(path=None, *, run_overrides: dict | None = None, param_overrides
             raise ParameterError(f"{where}: {t} = {data[t]!r} is not a table; allowed: a [{t}] table")
     run_d = {**dict(data.get("run", {})), **(run_overrides or {})}
     opt = RunOptions.from_mapping(run_d, f"{where} [run]")
-    par = {"m_w": 1000.0, **dict(data.get("params", {})), **(param_overrides or {})}
+    par = {"m_w": NOMINAL_RIM_KG, **dict(data.get("params", {})), **(param_overrides or {})}
     try:
         params = TyreParameters.from_mapping(par)
     except TiremodalError as exc:
@@ -200,9 +128,6 @@ def load_config(path=None, *, run_overrides: dict | None = None, param_overrides
 
 def _read_folder_test(test: BatchTest, mapping_name: str):
     """Ingest a UFF/CSV test folder; tyre and pressure from the mapping's optional [test]."""
-    from tiremodal_cli.io.config import load_mapping
-    from tiremodal_cli.io.ingest import read_source
-
     mp = test.path / mapping_name
     mapping = mp if mp.is_file() else None
     meta = dict(load_mapping(mapping).get("test", {})) if mapping else {}
@@ -220,12 +145,6 @@ def run_one(job: Job) -> dict:
     BLAS is held to one thread: the batch's parallelism is over tests, and small solves
     run slower multithreaded on the small machines this targets.
     """
-    from threadpoolctl import threadpool_limits
-
-    from tiremodal_cli.io.frffile import uff_function_types
-    from tiremodal_cli.io.ingest.uff import uff_files
-    from tiremodal_cli.io.measurement import write_measurement
-
     t0 = time.perf_counter()
     job.partial.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f"{job.test.name}.", dir=job.partial))
@@ -278,134 +197,13 @@ def record(test: BatchTest, status: str, *, outdir: Path | None = None, reason: 
     return rec
 
 
-# --------------------------------------------------------------------------- executors
-
-class SerialExecutor(cf.Executor):
-    """Runs each job in this process when submitted (``--jobs 1``: no pool to start)."""
-
-    def submit(self, fn, /, *args, **kwargs):
-        f = cf.Future()
-        try:
-            f.set_result(fn(*args, **kwargs))
-        except BaseException as exc:  # noqa: BLE001 — handed to the caller through the future
-            f.set_exception(exc)
-            if isinstance(exc, KeyboardInterrupt):
-                raise
-        return f
-
-
-_WORKER_LOCK = None  # a worker's shared lock on OUTDIR/.lock.workers (held for its life)
-
-
-def _die_with(parent_pid: int) -> None:
-    """Make this process end when ``parent_pid`` (the batch) ends, even by SIGKILL.
-
-    On Linux, PR_SET_PDEATHSIG asks the kernel for SIGKILL when the parent (the
-    forkserver, which exits at once when the batch does) dies; everywhere, a daemon
-    thread checks every 0.2 s that the batch is alive and ends the worker when not.
-    """
-    import sys
-    import threading
-
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
-
-            libc = ctypes.CDLL(None, use_errno=True)
-            PR_SET_PDEATHSIG = 1
-            libc.prctl(PR_SET_PDEATHSIG, 9, 0, 0, 0)  # SIGKILL
-        except (OSError, AttributeError):  # no libc prctl: the thread below still watches
-            pass
-
-    def watch():
-        while True:
-            try:
-                os.kill(parent_pid, 0)
-            except ProcessLookupError:
-                os._exit(137)
-            except PermissionError:  # alive, another user's (cannot happen for our parent)
-                pass
-            time.sleep(0.2)
-
-    threading.Thread(target=watch, name="tiremodal-parent-watch", daemon=True).start()
-
-
-def _worker_init(parent_pid: int, workers_lock: str | None) -> None:
-    """A pool worker's start: die with the batch; hold a shared lock on ``workers_lock``
-    so that no other batch takes OUTDIR while this worker lives (see :func:`_lock`)."""
-    global _WORKER_LOCK
-    _die_with(parent_pid)
-    if workers_lock is not None:
-        try:
-            import fcntl
-        except ImportError:
-            return
-        _WORKER_LOCK = open(workers_lock, "a+")
-        fcntl.flock(_WORKER_LOCK, fcntl.LOCK_SH)
-
-
-@contextlib.contextmanager
-def executor(jobs: int = 1, scheduler: str | None = None, *, workers_lock=None) -> Iterator[cf.Executor]:
-    """A ``concurrent.futures.Executor`` for the jobs.
-
-    scheduler : address of a Dask scheduler (``tcp://host:8786``): the jobs go to its
-        workers through ``distributed.Client.get_executor()``. The workers must see the
-        same paths (a shared file system) and have tiremodal installed.
-    jobs : local worker processes when no scheduler is given (1: in this process).
-    workers_lock : a file each local worker holds a shared lock on while it lives (the batch
-        takes it exclusively before it starts: a batch killed with SIGKILL keeps its OUTDIR
-        locked until its workers are gone). Local workers end with the batch, also when it
-        is killed with SIGKILL (:func:`_die_with`).
-    """
-    if scheduler:
-        try:
-            from distributed import Client
-        except ImportError:
-            raise ParameterError("--scheduler needs dask.distributed: pip install 'tiremodal[dask]'") from None
-        try:
-            client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError) as exc:
-            raise ParameterError(f"--scheduler {scheduler}: cannot connect ({exc})") from None
-        try:
-            yield client.get_executor(pure=False)
-        finally:
-            client.close()
-        return
-    if jobs < 1:
-        raise ParameterError(f"--jobs {jobs}: must be at least 1")
-    if jobs == 1:
-        yield SerialExecutor()
-        return
-    import multiprocessing as mp
-
-    # forkserver: workers start from a clean process (no inherited BLAS or lock state)
-    pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("forkserver"),
-                                  initializer=_worker_init,
-                                  initargs=(os.getpid(), None if workers_lock is None else str(workers_lock)))
-    try:
-        yield pool
-    except BaseException:
-        # interrupted: stop now, not after the jobs already queued to the workers
-        stop = getattr(pool, "terminate_workers", None)  # Python ≥ 3.14
-        if stop is not None:
-            stop()
-        else:  # before 3.14: the pool's processes (shutdown forgets them, so take them first)
-            procs = list((getattr(pool, "_processes", None) or {}).values())
-            pool.shutdown(wait=False, cancel_futures=True)
-            for proc in procs:
-                proc.terminate()
-        raise
-    else:
-        pool.shutdown(wait=True)
-
-
 # --------------------------------------------------------------------------- the batch
 
 @contextlib.contextmanager
 def _lock(outdir: Path):
     """Hold ``OUTDIR/.lock`` (advisory; POSIX) so two batches never write one OUTDIR."""
     try:
-        import fcntl
+        import fcntl  # here, not at the top: POSIX only
     except ImportError:  # not POSIX: no lock
         yield
         return
@@ -450,6 +248,43 @@ def plan(tests: Sequence[BatchTest], outdir: Path, config: BatchConfig, *, force
     return jobs, done
 
 
+@dataclass
+class _Records:
+    """The tests' records as they come in, given back in discovery order (``order``: test
+    name → its place)."""
+
+    order: dict[str, int]
+    by_test: dict[str, dict] = field(default_factory=dict)
+
+    def add(self, rec: dict) -> None:
+        self.by_test[rec["test"]] = rec
+
+    @property
+    def count(self) -> int:
+        return len(self.by_test)
+
+    def in_order(self) -> list[dict]:
+        return sorted(self.by_test.values(), key=lambda r: self.order[r["test"]])
+
+
+def _execute(todo: Sequence[Job], outdir: Path, records: _Records, *, jobs: int, scheduler: str | None,
+             progress: Callable[[dict, int], None] | None) -> None:
+    """Run the jobs on the executor; after each, its record added, the summary rewritten
+    (a killed batch keeps its rows) and ``progress(record, done)`` called."""
+    with executor(jobs, scheduler, workers_lock=outdir / WORKERS_LOCK) as ex:
+        futures = {ex.submit(run_one, j): j for j in todo}
+        for fut in cf.as_completed(futures):
+            j = futures[fut]
+            try:
+                rec = fut.result()
+            except Exception as exc:  # noqa: BLE001 — a worker died (killed, out of memory)
+                rec = record(j.test, "failed", reason=f"worker lost: {type(exc).__name__}: {exc}")
+            records.add(rec)
+            write_summary(outdir, records.in_order(), plots=False)  # a killed batch keeps its rows
+            if progress:
+                progress(rec, records.count)
+
+
 def run_batch(roots: Sequence, outdir, config: BatchConfig = BatchConfig(), *, jobs: int = 1,
               scheduler: str | None = None, force: bool = False,
               progress: Callable[[dict, int, int], None] | None = None, plots: bool = True) -> list[dict]:
@@ -483,100 +318,15 @@ def run_batch(roots: Sequence, outdir, config: BatchConfig = BatchConfig(), *, j
     with _lock(outdir):
         shutil.rmtree(outdir / PARTIAL, ignore_errors=True)  # debris of a killed batch
         todo, finished = plan(tests, outdir, config, force=force)
-        order = {t.name: i for i, t in enumerate(tests)}
-        results = {r["test"]: r for r in finished}
-        total = len(tests)
-
-        def sorted_records():
-            return sorted(results.values(), key=lambda r: order[r["test"]])
-
-        for i, r in enumerate(finished):
+        records = _Records({t.name: i for i, t in enumerate(tests)})
+        for r in finished:
+            records.add(r)
             if progress:
-                progress(r, i + 1, total)
+                progress(r, records.count, len(tests))
         if todo:
-            with executor(jobs, scheduler, workers_lock=outdir / WORKERS_LOCK) as ex:
-                futures = {ex.submit(run_one, j): j for j in todo}
-                for fut in cf.as_completed(futures):
-                    j = futures[fut]
-                    try:
-                        rec = fut.result()
-                    except Exception as exc:  # noqa: BLE001 — a worker died (killed, out of memory)
-                        rec = record(j.test, "failed", reason=f"worker lost: {type(exc).__name__}: {exc}")
-                    results[rec["test"]] = rec
-                    write_summary(outdir, sorted_records(), plots=False)  # a killed batch keeps its rows
-                    if progress:
-                        progress(rec, len(results), total)
-        recs = sorted_records()
+            _execute(todo, outdir, records, jobs=jobs, scheduler=scheduler,
+                     progress=None if progress is None else lambda rec, done: progress(rec, done, len(tests)))
+        recs = records.in_order()
         write_summary(outdir, recs, plots=plots)
         shutil.rmtree(outdir / PARTIAL, ignore_errors=True)
     return recs
-
-
-# --------------------------------------------------------------------------- summary
-
-_SCALARS = ("test", "file", "kind", "status", "reason", "tire", "inflation_pressure", "n_points", "n_hits",
-            "rejected_hits", "modes_found")
-_TAIL = ("adopted_effects", "parameter_off", "rms_error_pct", "rms_before_pct", "rms_after_pct", "verdict",
-         "seconds", "output")
-
-
-def summary_rows(records: Sequence[dict]) -> tuple[list[dict], list[str]]:
-    """Flat rows for the CSV: identified parameters as ``NAME`` and ``NAME_std_error``
-    columns, effect parameters of the final model as ``EFFECT.PARAM``, lists joined by ";".
-
-    Returns rows and the column names (the union over the tests, in a stable order).
-    """
-    pcols, ecols = [], []
-    for r in records:
-        for k in (r.get("identified") or {}):
-            if k not in pcols:
-                pcols.append(k)
-        for k in (r.get("augmented_parameters") or {}):
-            if "." in k and k not in ecols:
-                ecols.append(k)
-    cols = list(_SCALARS) + [c for k in pcols for c in (k, f"{k}_std_error")] + ecols + list(_TAIL)
-    rows = []
-    for r in records:
-        row = {k: r.get(k) for k in _SCALARS + _TAIL}
-        for k in ("adopted_effects", "parameter_off"):
-            row[k] = ";".join(r.get(k) or [])
-        for k, v in (r.get("identified") or {}).items():
-            row[k], row[f"{k}_std_error"] = v.get("value"), v.get("std_error")
-        for k in ecols:
-            v = (r.get("augmented_parameters") or {}).get(k)
-            row[k] = v.get("value") if isinstance(v, dict) else v
-        rows.append({k: ("" if row.get(k) is None else row.get(k)) for k in cols})
-    return rows, cols
-
-
-def write_summary(outdir, records: Sequence[dict], *, plots: bool = True) -> list[Path]:
-    """Write ``summary.csv``, ``summary.jsonl`` and (``plots``) the campaign figures, each
-    atomically. Returns the paths written."""
-    from tiremodal_cli.cli.options import rows_to_csv
-
-    outdir = Path(outdir)
-    rows, cols = summary_rows(records)
-    out = [write_text_atomic(outdir / SUMMARY_CSV, rows_to_csv(rows, cols), overwrite=True),
-           write_text_atomic(outdir / SUMMARY_JSONL, "".join(dumps(r).replace("\n", "") + "\n" for r in records),
-                             overwrite=True)]
-    if plots and any(r["status"] in ("done", "skipped") for r in records):
-        from tiremodal_cli.plots import plot_campaign_frequencies, plot_campaign_parameters, save_figure
-
-        for name, make in (("campaign_parameters", plot_campaign_parameters),
-                           ("campaign_frequencies", plot_campaign_frequencies)):
-            for ext in ("png", "svg"):
-                save_figure(make(records), outdir / f"{name}.{ext}", overwrite=True)
-                out.append(outdir / f"{name}.{ext}")
-    return out
-
-
-def read_summary(outdir) -> list[dict]:
-    """The records of a batch (``summary.jsonl``)."""
-    p = Path(outdir) / SUMMARY_JSONL
-    try:
-        return [json.loads(line) for line in p.read_text(encoding="utf-8").splitlines() if line.strip()]
-    except OSError:
-        raise DataFormatError(f"{outdir}: no batch summary ({SUMMARY_JSONL}); run 'tiremodal batch' first") from None
-    except ValueError as exc:
-        raise DataFormatError(f"{p}: not JSON lines ({exc})") from None
-

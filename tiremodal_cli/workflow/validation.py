@@ -4,7 +4,8 @@ A *case* is one simulated roving-hammer test — from the paper's model (``paper
 independent finite-element tyre (``ring``, :mod:`tiremodal_cli.tyre.ring`) — taken through
 ``run`` exactly as a user would, and scored against the generator's truth:
 
-* **modes** — every truth mode a test could show (see :func:`expected_groups`) is
+* **modes** — every truth mode a test could show (see
+  :func:`~tiremodal_cli.workflow.validation_scoring.expected_groups`) is
   *found* when ``run``'s modal table has a mode within 0.3 % in frequency with the
   right order n and branch (for orders above the spatial Nyquist order N/2: flagged
   as aliased; for modes outside the tool's branches — cavity, tangential — any label),
@@ -14,26 +15,13 @@ independent finite-element tyre (``ring``, :mod:`tiremodal_cli.tyre.ring`) — t
 * **diagnosis** — what was adopted against what the case holds;
 * the **run time** and, when ``run`` fails, its error.
 
-The rules that decide what a test *could* show are the ruler's, stated here and in
-docs/validation.md, and use only the generator's truth and the test's set-up:
-
-* the front end's usable band: the mode's half-power band, up to f (1 + ζ), below
-  fs / 2.56 (the usual analyser bandwidth under the anti-alias filter) and where the
-  hammer's force spectrum is within 20 dB of its low-frequency level — a mode with one
-  flank cut off by the band's top is fitted to that flank alone, its frequency biased
-  (the estimator rejects such a pole: :func:`tiremodal_cli.modal.modes._off_edges`);
-* visibility: the mode's peak accelerance at its best channel and point, |φ_o φ_i| / 2ζ,
-  at least 3 × the H1 noise floor there (sensor noise of std ``noise`` × the channel's
-  RMS, white, over the hits' averaged force spectrum);
-* not in an unresolvable crowd: no other truth mode of the same branch whose order is an
-  alias of this one with N points (n' ≡ ±n mod N) within one half-power bandwidth 2ζf
-  (different orders are told apart by the circumferential decomposition, aliases are not);
-* a degenerate cos/sin pair (or a pair split by less than ζ f) is one mode.
+How a case is scored — the ruler's rules — is :mod:`tiremodal_cli.workflow.validation_scoring`;
+this module holds the matrix (its factors, levels and physics), each case's simulation,
+and the taking of a case through ``run``.
 """
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import json
 import time
@@ -43,15 +31,18 @@ from pathlib import Path
 
 import numpy as np
 
+from tiremodal_cli.io.measurement import write_measurement
 from tiremodal_cli.tyre.model import TyreParameters
 from tiremodal_cli.tyre.ring_parameters import RING_VARIANTS, RingParameters
-from tiremodal_cli.tyre.simulate import Faults, SimulationConfig, half_sine_spectrum, simulate
+from tiremodal_cli.tyre.simulate import Faults, SimulationConfig, simulate
+from tiremodal_cli.workflow.pipeline import run as run_pipeline
+from tiremodal_cli.workflow.run_options import RunOptions
+from tiremodal_cli.workflow.validation_scoring import EXPECTED_DIAGNOSIS, TOLERANCE  # noqa: F401  (re-exported)
+from tiremodal_cli.workflow.validation_scoring import (detectable, diagnosis_right, expected_groups, read_modes,
+                                                       score_modes)
 
 __all__ = ["Case", "FACTORS", "REFERENCE", "PHYSICS", "PAIRS", "EXPECTED_DIAGNOSIS", "matrix", "config_for",
            "expected_groups", "score_modes", "run_case", "TOLERANCE"]
-
-#: Frequency tolerance of a match (relative).
-TOLERANCE = 0.003
 
 #: Levels of every factor (the reference's level first).
 FACTORS = {
@@ -75,35 +66,6 @@ PAIRS = {
     "paper": ("sidewall_membrane+air_cavity", "tangential+added_mass"),
     "ring": ("tangential+cavity", "sidewall_coupling+mass"),
 }
-
-#: What a right diagnosis adopts for each variant: (required, allowed). ``required``: the
-#: names (effects of the candidate library, or a parameter found off its nominal value) any
-#: one of which must be adopted; ``allowed``: names that may be adopted besides, because the
-#: variant holds that physics too. The three tangential variants of the ring are a belt
-#: that moves tangentially *and* stretches (finite EA): its n = 0 mode is held by the hoop
-#: stiffness (``extensible_belt``) and its n ≥ 1 modes feel the tangential coupling
-#: (``tangential``); the variants differ in how much of each shows. The ring's sidewall
-#: shear is the tangential sidewall stiffness k_t of the ``tangential`` effect. The ring's
-#: cavity air also stiffens the breathing mode (its uniform pressure, ρc²b²/A per length):
-#: on n = 0 that is the same stiffness as a belt's EA/R², which frequencies cannot tell apart.
-EXPECTED_DIAGNOSIS = {
-    "none": ((), ()),
-    "tangential": (("tangential",), ("extensible_belt",)),
-    "extensible": (("extensible_belt",), ("tangential",)),
-    "sidewall_shear": (("tangential",), ("extensible_belt",)),
-    "timoshenko": (("timoshenko",), ()),
-    "sidewall_coupling": (("sidewall_membrane",), ()),
-    "sidewall_membrane": (("sidewall_membrane",), ()),
-    "rim": (("m_w", "rim_fixture"), ("m_w", "rim_fixture")),
-    "cavity": (("air_cavity",), ("extensible_belt",)),
-    "air_cavity": (("air_cavity",), ()),
-    "mass": (("added_mass",), ()),
-    "added_mass": (("added_mass",), ()),
-    "viscoelastic": (("viscoelastic",), ()),
-}
-
-#: Level of the test that decides whether an effect is detectable at all (the diagnosis's).
-DETECT_ALPHA = 0.01
 
 #: Record length of every case, s (frequency resolution 0.5 Hz: a tenth of the narrowest
 #: half-power bandwidth, 2ζf = 2 × 0.02 × 55 Hz ≈ 2 Hz, is resolved five times over).
@@ -198,202 +160,12 @@ def config_for(case: Case) -> SimulationConfig:
     return SimulationConfig(params=params, effects=effects, **common)
 
 
-# ----------------------------------------------------------------------------- scoring
-
-def _alias(n: int, n_points: int) -> int:
-    r = n % n_points
-    return min(r, n_points - r)
-
-
-def _h_noise_floor(cfg: SimulationConfig, sim, freq_hz: float, channel: int) -> float:
-    """Std of the H1 estimate's error at ``freq_hz`` on ``channel`` (m/s²/N): white sensor
-    noise of std noise × the channel's RMS over the test, on the DFT of the record, over the
-    nominal hammer pulse's spectrum, averaged over the hits."""
-    if cfg.noise == 0:
-        return 0.0
-    resp = np.asarray(sim.measurement.response[:, :, channel, :], dtype=float)
-    rms = np.sqrt(np.mean(resp**2))
-    f_spec = abs(half_sine_spectrum([freq_hz], cfg.pulse_width_s, cfg.amplitude_n)[0]) * cfg.sample_rate
-    return float(cfg.noise * rms * np.sqrt(cfg.n_samples) / (f_spec * np.sqrt(cfg.n_hits)))
-
-
-def expected_groups(sim, cfg: SimulationConfig) -> list[dict]:
-    """The truth modes grouped (a degenerate pair is one mode), each with what a test could
-    show of it: ``valid`` (in the usable band), ``visible``, ``crowd``, ``aliased``
-    (n > N/2), ``foreign`` (a branch outside the tool's labels) and ``expected``
-    (valid, visible and not in a crowd)."""
-    truth = sim.truth
-    n_pts = len(truth["point_angle_rad"])
-    fs = cfg.sample_rate
-    f_pulse = np.linspace(0, 0.5 * fs, 2049)
-    spec = abs(half_sine_spectrum(f_pulse, cfg.pulse_width_s))
-    below = np.flatnonzero(spec < 0.1 * spec[0])
-    f_force = f_pulse[below[0]] if below.size else 0.5 * fs
-    f_valid = min(fs / 2.56, f_force)
-    names = [c.name for c in cfg.channels]
-    tread = next(c.name for c in cfg.channels if c.location == "tread")
-    modes = sorted(truth["modes"], key=lambda m: (m["branch"], m["n"], m["frequency_hz"]))
-    groups = []
-    for m in modes:
-        g = groups[-1] if groups else None
-        if (g is not None and g["branch"] == m["branch"] and g["n"] == m["n"]
-                and m["frequency_hz"] - g["members"][-1] <= m["damping_ratio"] * m["frequency_hz"]):
-            g["members"].append(m["frequency_hz"])
-            g["shapes"].append(m["shape_at_points"])
-            continue
-        groups.append({"n": m["n"], "branch": m["branch"], "zeta": m["damping_ratio"],
-                       "members": [m["frequency_hz"]], "shapes": [m["shape_at_points"]]})
-    out = []
-    for g in groups:
-        f = float(np.mean(g["members"]))
-        best = 0.0
-        for sh in g["shapes"]:
-            phi_in = np.asarray(sh[tread])
-            for ic, c in enumerate(names):
-                peak = np.max(np.abs(sh[c][0] * phi_in)) / (2 * g["zeta"])
-                floor = _h_noise_floor(cfg, sim, f, ic)
-                best = max(best, peak / floor if floor > 0 else (np.inf if peak > 0 else 0.0))
-        out.append({"frequency_hz": f, "members": list(g["members"]), "n": g["n"], "branch": g["branch"],
-                    "zeta": g["zeta"],
-                    "snr": float(best), "valid": bool(f * (1 + g["zeta"]) <= f_valid), "visible": bool(best >= 3.0),
-                    "aliased": bool(g["n"] > n_pts / 2),
-                    "foreign": g["branch"] not in ("same", "opposite", "rim")})
-    for g in out:
-        bw = 2 * g["zeta"] * g["frequency_hz"]
-        g["crowd"] = any(h is not g and h["branch"] == g["branch"] and _alias(h["n"], n_pts) == _alias(g["n"], n_pts)
-                         and abs(h["frequency_hz"] - g["frequency_hz"]) < bw for h in out)
-        g["expected"] = g["valid"] and g["visible"] and not g["crowd"]
-    return out
-
-
-def _read_modes(path) -> list[dict]:
-    with open(path, newline="", encoding="utf-8") as fh:
-        rows = list(csv.DictReader(fh))
-    out = []
-    for r in rows:
-        n = r.get("n", "")
-        out.append({"frequency_hz": float(r["frequency_hz"]), "damping_ratio": float(r["damping_ratio"]),
-                    "n": int(n) if n not in ("", None) else None, "branch": r.get("branch") or None,
-                    "aliased": str(r.get("n_aliased", "")).lower() == "true"})
-    return out
-
-
-def score_modes(groups: list[dict], rows: list[dict], truth_modes: list[dict]) -> dict:
-    """Found / mislabelled / missed / spurious (module docstring) and the errors of the
-    found modes' frequencies and damping ratios (relative)."""
-    found = mis = missed = 0
-    f_err, z_err, detail, bw_err = [], [], [], []
-    for g in (g for g in groups if g["expected"]):
-        cand = [r for r in rows if abs(r["frequency_hz"] / g["frequency_hz"] - 1) <= TOLERANCE]
-        if g["foreign"]:
-            ok = [r for r in cand]
-        elif g["aliased"]:
-            ok = [r for r in cand if r["aliased"]]
-        else:
-            ok = [r for r in cand if r["n"] == g["n"] and r["branch"] == g["branch"] and not r["aliased"]]
-        if ok:
-            found += 1
-            r = min(ok, key=lambda r: abs(r["frequency_hz"] - g["frequency_hz"]))
-            f_err.append(abs(r["frequency_hz"] / g["frequency_hz"] - 1))
-            z_err.append(abs(r["damping_ratio"] / g["zeta"] - 1))
-            bw_err.append(abs(r["frequency_hz"] - g["frequency_hz"]) / (2 * g["zeta"] * g["frequency_hz"]))
-            status = "found"
-        elif cand:
-            mis += 1
-            r = cand[0]
-            status = f"mislabelled as n={r['n']} {r['branch']}"
-        else:
-            missed += 1
-            status = "missed"
-        detail.append({"frequency_hz": round(g["frequency_hz"], 3), "n": g["n"], "branch": g["branch"],
-                       "status": status})
-    tf = np.array([m["frequency_hz"] for m in truth_modes]) if truth_modes else np.zeros(0)
-    spurious = [r for r in rows if not np.any(np.abs(tf / r["frequency_hz"] - 1) <= TOLERANCE)]
-    return {"expected": found + mis + missed, "found": found, "mislabelled": mis, "missed": missed,
-            "spurious": len(spurious), "adopted": len(rows), "surplus": _surplus(groups, rows),
-            "freq_err_bw": [float(x) for x in bw_err],
-            "spurious_hz": [round(r["frequency_hz"], 2) for r in spurious],
-            "freq_err_median_pct": 100 * float(np.median(f_err)) if f_err else None,
-            "damping_err_median_pct": 100 * float(np.median(z_err)) if z_err else None,
-            "n_aliased_groups": sum(1 for g in groups if g["expected"] and g["aliased"]),
-            "n_crowd_groups": sum(1 for g in groups if g["valid"] and g["crowd"]),
-            "detail": detail}
-
-
-def _surplus(groups: list[dict], rows: list[dict]) -> int:
-    """Table modes beyond one per truth mode: rows within 0.3 % of some truth mode (so not
-    spurious) that a one-to-one matching of rows to truth groups (a degenerate pair is one)
-    leaves over — one mode reported twice (a pole seen in two order groups and not merged)."""
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import maximum_bipartite_matching
-
-    if not rows or not groups:
-        return 0
-    fr = np.array([r["frequency_hz"] for r in rows])
-    fg = np.array([g["frequency_hz"] for g in groups])
-    near = np.abs(fr[:, None] / fg[None, :] - 1) <= TOLERANCE
-    matched = maximum_bipartite_matching(csr_matrix(near.astype(np.int8)), perm_type="column")
-    return int(np.sum(near.any(axis=1) & (matched < 0)))
-
-
-def _diagnosis_right(physics: str, adopted: list[str], detectable: bool = True) -> bool:
-    """Right when every part of ``physics`` has one of its required names adopted and
-    nothing else is adopted but their allowed names; an effect the base model absorbs within
-    the noise (:func:`detectable`): that, or nothing."""
-    parts = [p for p in physics.split("+") if p != "none"]
-    if not parts:
-        return not adopted
-    if not detectable and not adopted:  # at the edge of detectability: nothing, or the right effect
-        return True
-    spec = [EXPECTED_DIAGNOSIS.get(p, ((p,), ())) for p in parts]
-    ok = set().union(*(set(r) | set(a) for r, a in spec))
-    if any(a not in ok for a in adopted):
-        return False
-    return all(any(a in r for a in adopted) for r, _ in spec)
-
-
-def detectable(case: "Case", groups, params: TyreParameters) -> dict:
-    """Can the paper's model tell this case's physics from noise, given perfect modes?
-
-    The base model (k_r1, k_r2, EI free, rim as in ``run``) is fitted robustly to the
-    case's expected same/opposite truth modes (split pairs as their two members), each with
-    the diagnosis's 0.1 % frequency uncertainty: the physics is *detectable* when that fit's
-    residual exceeds the noise (χ² p < 0.01 or a mode set aside). An effect the base model
-    absorbs within the noise is not missing physics for it, and a right diagnosis adopts
-    nothing. Returns {"detectable", "rms_pct", "p_value", "set_aside"}."""
-    if case.physics == "none":
-        return {"detectable": False, "rms_pct": 0.0, "p_value": 1.0, "set_aside": 0}
-    from tiremodal_cli.diagnose.loop import DiagnoseOptions, base_fit, residual_analysis
-    from tiremodal_cli.tyre.measured import MeasuredMode
-    from tiremodal_cli.tyre.robust import with_sigma
-
-    modes = []
-    for g in groups:
-        if not (g["expected"] and g["branch"] in ("same", "opposite") and not g["aliased"]):
-            continue
-        mem = sorted(g["members"])
-        if len(mem) >= 2 and mem[-1] - mem[0] > 1e-6 * mem[0]:
-            modes += [MeasuredMode(g["n"], g["branch"], mem[0], member="lower"),
-                      MeasuredMode(g["n"], g["branch"], mem[-1], member="upper")]
-        else:
-            modes.append(MeasuredMode(g["n"], g["branch"], float(np.mean(mem))))
-    opt = DiagnoseOptions(alpha=DETECT_ALPHA)
-    rf = base_fit(with_sigma(modes, opt.noise_floor_pct), params, opt)
-    res = residual_analysis(rf, opt)
-    return {"detectable": bool(res["exceeds_noise"]), "rms_pct": rf.fit.rms_error_pct, "p_value": res["p_value"],
-            "set_aside": len(rf.set_aside)}
-
-
 def run_case(case: Case, workdir) -> dict:
     """Simulate a case, take it through ``run`` and score it (the module docstring).
 
     Returns one flat record (JSON-able); a failure of ``run`` is recorded with its error
     (type and message), never raised.
     """
-    from tiremodal_cli.io.measurement import write_measurement
-    from tiremodal_cli.workflow.run_options import RunOptions
-    from tiremodal_cli.workflow.pipeline import run as run_pipeline
-
     workdir = Path(workdir)
     workdir.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -413,7 +185,7 @@ def run_case(case: Case, workdir) -> dict:
         rec.update({k: v for k, v in score_modes(groups, [], sim.truth["modes"]).items() if k != "detail"})
         return rec
     rec["run_s"] = round(time.perf_counter() - t1, 2)
-    rows = _read_modes(workdir / "run" / "modes.csv")
+    rows = read_modes(workdir / "run" / "modes.csv")
     sc = score_modes(groups, rows, sim.truth["modes"])
     diag = json.loads((workdir / "run" / "diagnosis.json").read_text(encoding="utf-8"))
     # an effect adopted and a parameter found off, each once (a parameter can be both)
@@ -425,6 +197,6 @@ def run_case(case: Case, workdir) -> dict:
                final_rms_pct=float(diag["augmented"]["rms_error_pct"]), adopted_effects=adopted,
                detectable=det["detectable"], truth_base_rms_pct=det["rms_pct"],
                set_aside=len(diag.get("set_aside_before", [])),
-               diagnosis_right=_diagnosis_right(case.physics, adopted, det["detectable"]),
+               diagnosis_right=diagnosis_right(case.physics, adopted, det["detectable"]),
                verdict=diag.get("verdict", ""))
     return rec
