@@ -6,6 +6,7 @@ from __future__ import annotations
 import matplotlib
 import numpy as np
 
+from tiremodal_cli.conventions import BRANCHES
 from tiremodal_cli.names import effect_title, long_label
 from tiremodal_cli.plots.canvas import subplots
 
@@ -96,7 +97,7 @@ def plot_campaign_frequencies(records):
     """
     ok, x, xlabel, names = _campaign_axis(records)
     fig, axes = subplots(1, 2, figsize=(11, 4.5), sharey=True)
-    for ax, br in zip(axes, ("same", "opposite")):
+    for ax, br in zip(axes, BRANCHES):
         keys = sorted({m["n"] for r in ok for m in (r.get("modes") or []) if m["branch"] == br})
         cmap = matplotlib.colormaps["viridis"].resampled(max(len(keys), 2))
         for i, n in enumerate(keys):

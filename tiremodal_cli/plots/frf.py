@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tiremodal_cli.conventions import FORM_UNITS_DISPLAY
 from tiremodal_cli.plots.canvas import subplots
 
 __all__ = ["plot_frf"]
@@ -34,7 +35,7 @@ def plot_frf(r, *, points=(0,), channels=None, axes=None):
             axes[0].semilogy(r.freq_hz, np.abs(r.H[ic, ip]), lw=1, label=lab)
             axes[1].plot(r.freq_hz, np.rad2deg(np.angle(r.H[ic, ip])), lw=0.8)
             axes[2].plot(r.freq_hz, r.coherence[ic, ip], lw=0.8)
-    units = {"accelerance": "m/s²/N", "mobility": "m/s/N", "receptance": "m/N"}[r.form]
+    units = FORM_UNITS_DISPLAY[r.form]
     axes[0].set_ylabel(f"|{r.estimator if r.estimator != 'unknown' else 'H'}| [{units}]")
     axes[1].set_ylabel("phase [°]")
     axes[1].set_yticks([-180, -90, 0, 90, 180])

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.ticker import FuncFormatter, MaxNLocator
 
+from tiremodal_cli.conventions import BRANCHES
 from tiremodal_cli.names import long_label
 from tiremodal_cli.plots.canvas import subplots
 
@@ -67,7 +68,7 @@ def plot_sensitivity(ns, branches, S, names, *, ax=None):
     """Normalised sensitivities ∂ln f/∂ln p against n, one line per parameter and branch."""
     if ax is None:
         _, ax = subplots(1, 2, figsize=(11, 4.5), sharey=True)
-    for k, br in enumerate(("same", "opposite")):
+    for k, br in enumerate(BRANCHES):
         sel = np.asarray(branches) == br
         for j, name in enumerate(names):
             ax[k].plot(np.asarray(ns)[sel], S[sel, j], "o-", ms=3, label=long_label(name))
@@ -88,7 +89,7 @@ def plot_residuals(modes, *, axes=None):
     """
     if axes is None:
         fig, axes = subplots(1, 2, figsize=(11, 4.5), sharey=True)
-    for ax, br in zip(axes, ("same", "opposite")):
+    for ax, br in zip(axes, BRANCHES):
         m = sorted((x for x in modes if x["branch"] == br), key=lambda x: x["n"])
         n = [x["n"] for x in m]
         ax.axhline(0, color="k", lw=0.8)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tiremodal_cli.conventions import BRANCHES
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.tyre.effects import resolve_effects
 from tiremodal_cli.tyre.model import TyreParameters, closed_form_hz, branch_label, fixed_point_hz, generalised_length, pair_eigenvalues, solve_block, stacked_blocks
@@ -63,7 +64,7 @@ def branch_frequencies(ns, p: TyreParameters, effects=()) -> np.ndarray:
         md = np.diag(blk.M)
         labels = [branch_label(vecs[:, r], blk.dofs, md) for r in range(len(w2))]
         f1 = np.sqrt(w2) / (2 * np.pi)
-        for col, name in enumerate(("same", "opposite")):
+        for col, name in enumerate(BRANCHES):
             sel = [r for r, lab in enumerate(labels) if lab == name]
             if sel:
                 out[ns == 1, col] = f1[min(sel, key=lambda r: f1[r])]

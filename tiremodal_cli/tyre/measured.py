@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tiremodal_cli.conventions import BRANCHES
+
 __all__ = ['MeasuredMode', 'modes_from_rows']
 
 
@@ -114,7 +116,7 @@ WEAK_SIGNIFICANCE = 0.05
 def _row_problem(get, n, b, f, min_confidence, min_mpc) -> str | None:
     """Why a table row cannot enter the fit (None when it can)."""
     conf, order_ok, mpc = get("n_confidence"), get("in_order"), get("mpc")
-    if b not in ("same", "opposite") or n < 0 or not f > 0:
+    if b not in BRANCHES or n < 0 or not f > 0:
         return f"branch {b!r} / n {n} not fitted"
     crowd = get("crowd")
     if crowd is not None and str(crowd).strip().lower() in ("true", "1"):  # lsce: the order cannot be told

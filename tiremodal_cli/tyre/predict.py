@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tiremodal_cli.conventions import BRANCHES
 from tiremodal_cli.tyre.evaluate import apply_parameters
 from tiremodal_cli.tyre.fit_types import FitResult
 from tiremodal_cli.tyre.frequencies import model_frequencies
@@ -23,7 +24,7 @@ def predict_table(res: FitResult, n_max: int, *, measured=()) -> list[dict]:
     opt = res.options
     base = res.parameters
     ns = np.repeat(np.arange(0, n_max + 1), 2)
-    br = np.array(["same", "opposite"] * (n_max + 1))
+    br = np.array(list(BRANCHES) * (n_max + 1))
 
     def f_of(lx):
         p, eff = apply_parameters(base, opt, names, lx)

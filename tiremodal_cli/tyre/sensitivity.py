@@ -14,6 +14,7 @@ import dataclasses
 
 import numpy as np
 
+from tiremodal_cli.conventions import BRANCHES
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.tyre.frequencies import model_frequencies
 from tiremodal_cli.tyre.model import TyreParameters
@@ -26,7 +27,7 @@ PAPER_STUDY = ("EI", "rhoA", "b", "m_s", "k_r1", "k_r2")
 
 def _modes(n_max):
     ns = np.repeat(np.arange(1, n_max + 1), 2)
-    br = np.array(["same", "opposite"] * n_max)
+    br = np.array(list(BRANCHES) * n_max)
     return ns, br
 
 
