@@ -33,7 +33,8 @@ def compare(folder: str) -> dict:
     from threadpoolctl import threadpool_limits
 
     from tiremodal_cli.diagnose import DiagnoseOptions, diagnose, report, usable_modes
-    from tiremodal_cli.io.modalfile import read_modal, to_rows
+    from tiremodal_cli.io.modalfile import read_modal
+    from tiremodal_cli.modal.table import to_rows
     from tiremodal_cli.tyre.model import TyreParameters
     from tiremodal_cli.workflow.pipeline import rim_state
 

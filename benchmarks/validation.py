@@ -31,7 +31,7 @@ from threadpoolctl import threadpool_limits
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tiremodal_cli.modal.modes import SAME_POLE_FLOOR_BW  # noqa: E402
+from tiremodal_cli.modal.merge import SAME_POLE_FLOOR_BW  # noqa: E402
 from tiremodal_cli.workflow.validation import FACTORS, REFERENCE, Case, matrix, run_case  # noqa: E402
 
 
@@ -143,7 +143,7 @@ def datasheet(records: list[dict]) -> str:
     out.append("\n### The estimator's frequency bias, in half-power bandwidths\n")
     out.append("|f̂ − f| / 2ζf of every mode found (all cases): what two estimates of one pole differ by, "
                "and the floor under which `lsce` takes two order groups' poles for one "
-               "(`modes.SAME_POLE_FLOOR_BW`).\n")
+               "(`merge.SAME_POLE_FLOOR_BW`).\n")
     out.append("| generator | modes found | median | 99th percentile | largest | share above the floor |")
     out.append("|---|---|---|---|---|---|")
     for g in sorted({r["case"]["generator"] for r in ok}):

@@ -13,7 +13,7 @@ from tiremodal_cli.diagnose.loop import DiagnoseOptions, diagnose
 from tiremodal_cli.tyre.effects import resolve_effects
 from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
 from tiremodal_cli.io.measurement import write_measurement
-from tiremodal_cli.io.modalfile import to_rows
+from tiremodal_cli.modal.table import to_rows
 from tiremodal_cli.tyre.frequencies import branch_frequencies, point_mass_pairs
 from tiremodal_cli.tyre.model import TyreParameters
 from tiremodal_cli.tyre.solve import solve_modes

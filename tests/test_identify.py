@@ -131,7 +131,7 @@ def test_identify_bad_input(tmp_path, csv_text, args, msg):
 def test_end_to_end_from_time_records():
     """simulate → frf → lsce → identify: k_r1, k_r2 within 2 %, unmeasured orders within 0.5 %."""
     from tiremodal_cli.frf.estimate import compute_frf
-    from tiremodal_cli.io.modalfile import to_rows
+    from tiremodal_cli.modal.table import to_rows
     from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
     from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
 

@@ -10,7 +10,8 @@ import numpy as np
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, sha256_file
 from tiremodal_cli.frf.estimate import ESTIMATORS, FORMS, FRFOptions, compute_frf
-from tiremodal_cli.io.frffile import describe_frf, write_frf, write_frf_uff
+from tiremodal_cli.io.frffile import describe_frf, write_frf
+from tiremodal_cli.io.frfuff import write_frf_uff
 from tiremodal_cli.io.measurement import open_measurement
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option

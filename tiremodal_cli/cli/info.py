@@ -8,7 +8,7 @@ import click
 import numpy as np
 import pyuff
 
-from tiremodal_cli.io import frffile, measurement, modalfile
+from tiremodal_cli.io import frffile, frfuff, measurement, modalfile
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import echo_json, json_option
@@ -43,7 +43,7 @@ def info_cmd(file, as_json):
     form, the unit found and its factor to SI, the channels and where their locations and
     the points' angles come from; a UFF file of time records by its records.
     """
-    if frffile.is_uff(file):
+    if frfuff.is_uff(file):
         d = {"file": str(file), **_describe_uff(file)}
         echo_json(d) if as_json else click.echo(_human(d))
         return
@@ -63,7 +63,7 @@ def info_cmd(file, as_json):
 def _describe_uff(path) -> dict:
     """A UFF file: FRFs as ``run`` reads them, else its time records counted."""
     if 4 in frffile.uff_function_types([path]):
-        return frffile.describe_frf_uff(path)
+        return frfuff.describe_frf_uff(path)
     sets = pyuff.UFF(str(path)).read_sets()
     sets = [s for s in ([sets] if isinstance(sets, dict) else sets) if s.get("type") == 58]
     if not sets:

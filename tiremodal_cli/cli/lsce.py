@@ -8,9 +8,11 @@ import click
 import numpy as np
 
 from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, sha256_file, write_text_atomic
-from tiremodal_cli.io.frffile import read_frf, read_frf_uff
+from tiremodal_cli.io.frffile import read_frf
+from tiremodal_cli.io.frfuff import read_frf_uff
 from tiremodal_cli.io.ingest import load_channel_map
-from tiremodal_cli.io.modalfile import to_csv, to_rows, write_modal
+from tiremodal_cli.io.modalfile import to_csv, write_modal
+from tiremodal_cli.modal.table import to_rows
 from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
 from tiremodal_cli.modal.stabilization import StabilizationOptions
 from tiremodal_cli.cli.main import cli

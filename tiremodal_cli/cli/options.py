@@ -14,8 +14,9 @@ from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.config import load_mapping
 from tiremodal_cli.io.files import dumps  # noqa: F401  (re-exported for the commands)
 from tiremodal_cli.io.measurement import file_format
-from tiremodal_cli.io.modalfile import FORMAT_NAME, read_modal, read_modal_csv, to_rows
-from tiremodal_cli.io.modalfile import no_usable_modes  # noqa: F401  (re-exported for the commands)
+from tiremodal_cli.io.modalfile import FORMAT_NAME, read_modal, read_modal_csv
+from tiremodal_cli.modal.table import to_rows
+from tiremodal_cli.io.modalfile import no_usable_modes  # noqa: F401  (re-exported for the commands
 
 # Start-up: every command imports this module, so what only some need is imported inside the
 # function that needs it (the tyre model and scipy, matplotlib).

@@ -8,7 +8,7 @@ import click
 
 from tiremodal_cli.errors import OutputExistsError
 from tiremodal_cli.io.files import refuse_input_as_output
-from tiremodal_cli.io.frffile import is_uff
+from tiremodal_cli.io.frfuff import is_uff
 from tiremodal_cli.tyre.model import NOMINAL_RIM_KG
 from tiremodal_cli.workflow.run_folder import run_folder
 from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions

@@ -26,7 +26,6 @@ def _umask() -> int:
 
 #: the process's file-creation mask, read once (reading it means setting it: not thread-safe)
 UMASK = _umask()
-_UMASK = UMASK  # the old name, still imported by workflow/ (to go once they import UMASK)
 
 __all__ = ["atomic_path", "check_overwrite", "dumps", "install_dir", "sha256_file", "write_text_atomic",
            "refuse_input_as_output", "path_lock", "check_size", "UMASK"]

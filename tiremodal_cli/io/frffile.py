@@ -23,15 +23,11 @@ from tiremodal_cli import __version__
 from tiremodal_cli.conventions import FORM_UNITS
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import atomic_path
-from tiremodal_cli.io.frfuff import describe_frf_uff, is_uff, read_frf_uff, uff_function_types, write_frf_uff
 from tiremodal_cli.frf.estimate import FRFResult
 from tiremodal_cli.frf.screening import Rejection
 from tiremodal_cli.io.measurement import attr_str, open_hdf5, read_strings
 
-# The UFF functions are re-exported: the CLI and workflow/ import them from here (they
-# should import them from tiremodal_cli.io.frfuff; then these names go).
-__all__ = ["FORMAT_NAME", "write_frf", "read_frf", "describe_frf", "UNITS",
-           "write_frf_uff", "read_frf_uff", "describe_frf_uff", "is_uff", "uff_function_types"]
+__all__ = ["FORMAT_NAME", "write_frf", "read_frf", "describe_frf", "UNITS"]
 
 FORMAT_NAME = "tiremodal.frf"
 FORMAT_VERSION = 1

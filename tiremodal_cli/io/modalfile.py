@@ -38,13 +38,10 @@ from tiremodal_cli import __version__
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import atomic_path
 from tiremodal_cli.io.measurement import attr_str, open_hdf5, read_strings
-from tiremodal_cli.modal.table import (COLUMNS, STATUS_CODES, ModalTable, channel_live, table_from_result,
-                                       to_rows)
+from tiremodal_cli.modal.table import COLUMNS, ModalTable, channel_live, to_rows
 
-# ModalTable, table_from_result, to_rows, STATUS_CODES and COLUMNS (modal.table) are
-# re-exported: the CLI, workflow/ and the Python API import them from here.
-__all__ = ["FORMAT_NAME", "ModalTable", "table_from_result", "write_modal", "read_modal", "to_rows",
-           "to_csv", "read_modal_csv", "describe_modal", "STATUS_CODES", "no_usable_modes", "N_ORDER_MAX"]
+__all__ = ["FORMAT_NAME", "write_modal", "read_modal", "to_csv", "read_modal_csv", "describe_modal",
+           "no_usable_modes", "N_ORDER_MAX"]
 
 FORMAT_NAME = "tiremodal.modal"
 FORMAT_VERSION = 1

@@ -23,7 +23,7 @@ from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
 from tiremodal_cli.modal.lsfd import mpc
-from tiremodal_cli.modal.merge import SAME_POLE_FLOOR_BW, GroupMode, merge_groups, off_edges, swap_cost
+from tiremodal_cli.modal.merge import GroupMode, merge_groups, off_edges, swap_cost
 from tiremodal_cli.modal.plscf import sweep_plscf
 from tiremodal_cli.modal.spatial import decompose
 from tiremodal_cli.modal.stabilization import StabilizationOptions, stabilize
@@ -32,10 +32,7 @@ from tiremodal_cli.modal.table import table_from_result
 log = logging.getLogger(__name__)
 GROUP_MAX_ORDER = 40  # an order group holds a few modes, plus what models the band edges
 
-# SAME_POLE_FLOOR_BW (modal.merge) is re-exported: benchmarks/validation.py imports it from
-# here (it should import it from modal.merge; then it goes).
-__all__ = ["ModalOptions", "ModalResult", "estimate_modes", "is_circumferential", "modal_table_from_frf", "confirmed",
-           "SAME_POLE_FLOOR_BW"]
+__all__ = ["ModalOptions", "ModalResult", "estimate_modes", "is_circumferential", "modal_table_from_frf", "confirmed"]
 
 
 @dataclass(frozen=True)

@@ -42,8 +42,8 @@ from threadpoolctl import threadpool_limits
 
 from tiremodal_cli.errors import DataFormatError, ParameterError, TiremodalError
 from tiremodal_cli.io.config import load_mapping
-from tiremodal_cli.io.files import _UMASK, install_dir
-from tiremodal_cli.io.frffile import uff_function_types
+from tiremodal_cli.io.files import UMASK, install_dir
+from tiremodal_cli.io.frfuff import uff_function_types
 from tiremodal_cli.io.ingest import read_source
 from tiremodal_cli.io.ingest.uff import uff_files
 from tiremodal_cli.io.measurement import write_measurement
@@ -148,7 +148,7 @@ def run_one(job: Job) -> dict:
     t0 = time.perf_counter()
     job.partial.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f"{job.test.name}.", dir=job.partial))
-    os.chmod(tmp, 0o777 & ~_UMASK)  # mkdtemp makes 0700; give what mkdir would
+    os.chmod(tmp, 0o777 & ~UMASK)  # mkdtemp makes 0700; give what mkdir would
     try:
         with threadpool_limits(1):
             meas, mapping = job.test.path, None

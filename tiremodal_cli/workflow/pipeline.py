@@ -21,11 +21,13 @@ from tiremodal_cli.errors import DataFormatError, ParameterError
 from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
 from tiremodal_cli.io.config import load_mapping
 from tiremodal_cli.io.files import sha256_file, write_text_atomic
-from tiremodal_cli.io.frffile import is_uff, read_frf_uff, write_frf
+from tiremodal_cli.io.frffile import write_frf
+from tiremodal_cli.io.frfuff import is_uff, read_frf_uff
 from tiremodal_cli.io.ingest import load_channel_map
 from tiremodal_cli.io.measurement import open_measurement
 from tiremodal_cli.io.modalfile import no_usable_modes
-from tiremodal_cli.io.modalfile import to_csv, to_rows, write_modal
+from tiremodal_cli.io.modalfile import to_csv, write_modal
+from tiremodal_cli.modal.table import to_rows
 from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
 from tiremodal_cli.tyre.flexible_tread import errors_by_branch, fit_flexible_tread
 from tiremodal_cli.tyre.measured import modes_from_rows

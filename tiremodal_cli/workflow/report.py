@@ -24,7 +24,7 @@ import numpy as np
 from tiremodal_cli import names, plots
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.export import shape_set
-from tiremodal_cli.io.files import _UMASK, install_dir, write_text_atomic
+from tiremodal_cli.io.files import UMASK, install_dir, write_text_atomic
 from tiremodal_cli.io.frffile import read_frf
 from tiremodal_cli.io.modalfile import read_modal
 from tiremodal_cli.workflow.html import escape, img, number, page, render
@@ -43,7 +43,7 @@ FIGURE_DIR = "figures"
 def _figure_folder(parent: Path) -> Path:
     """A new private folder in ``parent`` to build a figure folder in (made as mkdir would)."""
     tmp = Path(tempfile.mkdtemp(prefix=f".{FIGURE_DIR}.", dir=parent))
-    os.chmod(tmp, 0o777 & ~_UMASK)  # mkdtemp makes 0700
+    os.chmod(tmp, 0o777 & ~UMASK)  # mkdtemp makes 0700
     return tmp
 
 

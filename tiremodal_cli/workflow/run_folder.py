@@ -10,8 +10,8 @@ from pathlib import Path
 
 from tiremodal_cli.errors import OutputExistsError
 from tiremodal_cli.errors import DataFormatError, ParameterError
-from tiremodal_cli.io.files import _UMASK, install_dir, path_lock, refuse_input_as_output, sha256_file
-from tiremodal_cli.io.frffile import is_uff
+from tiremodal_cli.io.files import UMASK, install_dir, path_lock, refuse_input_as_output, sha256_file
+from tiremodal_cli.io.frfuff import is_uff
 from tiremodal_cli.tyre.model import TyreParameters
 from tiremodal_cli.workflow.pipeline import run
 from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions
@@ -78,7 +78,7 @@ def run_folder(measurement, outdir, opt: RunOptions = RunOptions(), *, params: T
         for debris in [*parent.glob(f".{outdir.name}.partial.*"), *parent.glob(f".{outdir.name}.old.*")]:
             shutil.rmtree(debris, ignore_errors=True)  # of a killed run (we hold the lock)
         tmp = Path(tempfile.mkdtemp(prefix=f".{outdir.name}.partial.", dir=parent))
-        os.chmod(tmp, 0o777 & ~_UMASK)
+        os.chmod(tmp, 0o777 & ~UMASK)
         try:
             meas = _carry_over(outdir, tmp, measurement)
             sha = sha256_file(measurement)

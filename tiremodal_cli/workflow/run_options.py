@@ -26,7 +26,7 @@ class RunOptions:
     frf_top : FRFs up to frf_top × fs (1/2.56 = 0.390625: an analyser's usable bandwidth under its
         anti-alias filter; the lsce band then ends where the coherence and force fail)
     band : lsce band (Hz); default: where the coherence and the force spectrum support the
-        estimate (:func:`tiremodal_cli.modal.modes.default_band`, its reason in the modal file)
+        estimate (:func:`tiremodal_cli.modal.band.default_band`, its reason in the modal file)
     exp_end : exponential window's value at the record's end (its damping is corrected)
     predict_n : predictions (and sensitivities) reach at least this order, and always two
         beyond the highest measured one

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from tiremodal_cli import names
-from tiremodal_cli.io.frffile import UNITS
+from tiremodal_cli.conventions import FORM_UNITS
 from tiremodal_cli.io.modalfile import read_modal_csv
 from tiremodal_cli.tyre.effects import EFFECTS
 from tiremodal_cli.workflow.html import escape, img, table, written_by
@@ -240,7 +240,7 @@ def _test_facts(man: dict) -> list[tuple[str, object]]:
     if src:
         facts += [("input", f"{src['kind']}; the pipeline started at lsce"),
                   ("impact points", s["n_points"]),
-                  ("FRF units", f"{src['unit_in_file']} in the file, × {src['to_si']:.6g} → {UNITS[src['form']]} "
+                  ("FRF units", f"{src['unit_in_file']} in the file, × {src['to_si']:.6g} → {FORM_UNITS[src['form']]} "
                                 f"({src['form']}); from {src['from']}"),
                   ("point angles from", src["geometry"]),
                   ("sign flipped (negative direction code)", ", ".join(src["sign_flipped"]) or "none")]

@@ -7,7 +7,7 @@ What a test *could* show:
   fs / 2.56 (the usual analyser bandwidth under the anti-alias filter) and where the
   hammer's force spectrum is within 20 dB of its low-frequency level — a mode with one
   flank cut off by the band's top is fitted to that flank alone, its frequency biased
-  (the estimator rejects such a pole: :func:`tiremodal_cli.modal.modes._off_edges`);
+  (the estimator rejects such a pole: :func:`tiremodal_cli.modal.merge.off_edges`);
 * visibility: the mode's peak accelerance at its best channel and point, |φ_o φ_i| / 2ζ,
   at least 3 × the H1 noise floor there (sensor noise of std ``noise`` × the channel's
   RMS, white, over the hits' averaged force spectrum);
