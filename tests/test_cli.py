@@ -53,6 +53,19 @@ def test_help_imports_no_command_and_no_scipy():
     assert "Commands:" in res.stdout and res.stderr.strip() == "", res.stderr
 
 
+def test_run_and_batch_import_neither_scipy_stats_nor_matplotlib():
+    """The pipeline's imports stay lean (issue 19): scipy.stats (0.4 s) is not needed for
+    a p-value or a quantile (scipy.special has them), matplotlib only for figures."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nimport tiremodal_cli.cli.run, tiremodal_cli.cli.batch, tiremodal_cli.workflow.batch\n"
+            "print(','.join(sorted(m for m in sys.modules if m.startswith(('scipy.stats', 'matplotlib')))),"
+            " file=sys.stderr)\n")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert res.stderr.strip() == "", res.stderr
+
+
 def test_every_help_ends_with_an_example_that_uses_its_own_options():
     import shlex
 

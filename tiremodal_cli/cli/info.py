@@ -62,7 +62,7 @@ def info_cmd(file, as_json):
 
 def _describe_uff(path) -> dict:
     """A UFF file: FRFs as ``run`` reads them, else its time records counted."""
-    if 4 in frffile.uff_function_types([path]):
+    if 4 in frfuff.uff_function_types([path]):
         return frfuff.describe_frf_uff(path)
     sets = pyuff.UFF(str(path)).read_sets()
     sets = [s for s in ([sets] if isinstance(sets, dict) else sets) if s.get("type") == 58]

@@ -52,6 +52,8 @@ class ModalOptions:
               component as two references (poly-reference LSCE, or pLSCF with
               ``method="plscf"``), so that split pairs resolve; orders 1 … ``poly_order``
     skip : LSCE's first impulse-response sample in the autoregression (single reference)
+    workers : threads that solve a poly-reference sweep's model orders (LAPACK releases the
+              GIL; the poles are the same to the bit whatever the number)
     """
 
     band_hz: tuple[float, float] | None = None
@@ -64,6 +66,7 @@ class ModalOptions:
     poly: bool = True
     poly_order: int = 30
     skip: int = 0
+    workers: int = 1
 
     def check(self):
         if self.spatial not in ("auto", "on", "off"):
@@ -74,6 +77,8 @@ class ModalOptions:
             raise ParameterError(f"max_order={self.max_order} must be 2 … 400")
         if self.poly_order < 1 or self.skip < 0:
             raise ParameterError(f"poly_order={self.poly_order} must be ≥ 1 and skip={self.skip} ≥ 0")
+        if not 1 <= self.workers <= 64:
+            raise ParameterError(f"workers={self.workers} must be 1 … 64")
 
 
 @dataclass(frozen=True)
@@ -266,7 +271,7 @@ def _group_poles(data: GroupData, b, spatial: bool, group_max: int) -> list:
         return poles
     if poly:  # split pairs resolve
         irf = np.fft.ifft(rows.reshape(n_h, data.n_c, -1).transpose(1, 0, 2), axis=-1)
-        return sweep_poly(irf, range(1, opt.poly_order + 1), b.dt, b.f_lo, b.width_hz)
+        return sweep_poly(irf, range(1, opt.poly_order + 1), b.dt, b.f_lo, b.width_hz, workers=opt.workers)
     return sweep(b, range(2, group_max + 1), skip=opt.skip)
 
 

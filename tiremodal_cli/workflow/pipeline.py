@@ -15,6 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_info
 
 from tiremodal_cli.diagnose.loop import DiagnoseOptions, base_fit, diagnose, report, usable_modes
 from tiremodal_cli.errors import DataFormatError, ParameterError
@@ -37,7 +38,7 @@ from tiremodal_cli.tyre.sensitivity import PAPER_STUDY, coefficients
 from tiremodal_cli.workflow.manifest import files_sha256, provenance
 from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions, json_text
 
-__all__ = ['run', 'rim_condition', 'rim_state', 'read_uff_test']
+__all__ = ['run', 'rim_condition', 'rim_state', 'read_uff_test', 'thread_budget']
 
 
 def rim_condition(r, params: TyreParameters) -> tuple[TyreParameters, str]:
@@ -160,10 +161,18 @@ def _frf_input(paths, opt: RunOptions, mapping, say):
     return r, force_g, meta, sha256_file(paths[0])
 
 
+def thread_budget() -> int:
+    """Threads ``run`` may use: the size of the BLAS thread pool it is given (threadpoolctl;
+    a batch job runs under a limit of one, so its tests run one thread each)."""
+    n = [i["num_threads"] for i in threadpool_info() if i.get("user_api") == "blas"]
+    return max(1, min(n)) if n else 1
+
+
 def _modal_stage(r, force_g, opt: RunOptions, outdir: Path):
-    """The modal table of the FRFs, written as modal.h5 and modes.csv."""
-    table, _ = modal_table_from_frf(r, ModalOptions(band_hz=None if opt.band is None else tuple(opt.band)),
-                                    force_autospectrum=force_g)
+    """The modal table of the FRFs, written as modal.h5 and modes.csv (the poly-reference
+    sweeps' model orders solved in :func:`thread_budget` threads: the same poles)."""
+    mopt = ModalOptions(band_hz=None if opt.band is None else tuple(opt.band), workers=thread_budget())
+    table, _ = modal_table_from_frf(r, mopt, force_autospectrum=force_g)
     write_modal(outdir / "modal.h5", table, input_file="frf.h5",
                 input_sha256=sha256_file(outdir / "frf.h5"), overwrite=True)
     write_text_atomic(outdir / "modes.csv", to_csv(table), overwrite=True)
