@@ -88,6 +88,11 @@ class MeasuredModes(NamedTuple):
     skipped: tuple[dict, ...]
     unexplained: tuple[dict, ...]
 
+    def to_dict(self) -> dict:
+        """JSON-ready data: the modes, the rows left out and those that fit no (n, branch)."""
+        return {"modes": [m.to_dict() for m in self.modes], "skipped": list(self.skipped),
+                "unexplained": list(self.unexplained)}
+
 
 def usable_modes(rows, opt: DiagnoseOptions, *, min_confidence: float = 0.5, source: str = "", on_empty=None):
     """The modes a diagnosis fits (split pairs as two members, each with its σ_f), the rows

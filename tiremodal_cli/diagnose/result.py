@@ -77,6 +77,10 @@ class Diagnosis:
     base_robust: RobustFit | None = None
     augmented_robust: RobustFit | None = None
 
+    def to_dict(self, n_max: int = 12) -> dict:
+        """The diagnosis as JSON-ready data (:func:`report`; predictions up to order ``n_max``)."""
+        return report(self, n_max)
+
 
 def verdict_text(adopted, tried, before, after, unexplained) -> str:
     if not before["exceeds_noise"] and not adopted:

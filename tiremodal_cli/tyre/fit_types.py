@@ -100,3 +100,23 @@ class FitResult:
     jacobian: np.ndarray
     covariance_log: np.ndarray
     options: FitOptions
+
+    def to_dict(self) -> dict:
+        """The fit as JSON-ready data (the keys of ``identify --json`` but the skipped rows
+        and the predictions, which :func:`tiremodal_cli.tyre.predict.fit_report` adds)."""
+        names = list(self.free)
+        o = self.options
+        return {
+            "parameters": {n: {"value": float(v), "std_error": float(s), "relative_std_error_pct": float(100 * s / v)}
+                           for n, v, s in zip(names, self.values, self.std_errors)},
+            "all_parameters": self.parameters.to_dict(), "effects": self.effects,
+            "correlation": {"names": names, "matrix": np.round(self.correlation, 6).tolist()},
+            "undetermined": self.undetermined,
+            "rms_error_pct": self.rms_error_pct, "max_error_pct": self.max_error_pct,
+            "modes": self.modes,
+            "not_followed": [m for m in self.modes if abs(m["error_pct"]) > max(2.0, 2 * self.rms_error_pct)],
+            "history": [{"generation": g, "rms_error_pct": 100 * v} for g, v in self.history],
+            "search": {"method": "differential_evolution + least_squares", "seed": o.seed,
+                       "population": o.population, "generations": o.generations,
+                       "crossover": o.crossover, "mutation": o.mutation, "weights": o.weights},
+        }

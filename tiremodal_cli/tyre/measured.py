@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,6 +26,10 @@ class MeasuredMode:
     source: str = ""
     member: str | None = None  # "lower"/"upper" member of a split pair kept apart (diagnose)
     aliased: bool = False  # n above the spatial Nyquist order: read from the dispersion, not the points
+
+    def to_dict(self) -> dict:
+        """The mode as JSON-ready data (its fields)."""
+        return dataclasses.asdict(self)
 
 
 def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,

@@ -48,21 +48,10 @@ def predict_table(res: FitResult, n_max: int, *, measured=()) -> list[dict]:
 
 
 def fit_report(res, skipped, predictions) -> dict:
-    """An identification as JSON-ready data (the keys of ``identify --json``)."""
-    names = list(res.free)
-    return {
-        "parameters": {n: {"value": float(v), "std_error": float(s), "relative_std_error_pct": float(100 * s / v)}
-                       for n, v, s in zip(names, res.values, res.std_errors)},
-        "all_parameters": res.parameters.to_dict(), "effects": res.effects,
-        "correlation": {"names": names, "matrix": np.round(res.correlation, 6).tolist()},
-        "undetermined": res.undetermined,
-        "rms_error_pct": res.rms_error_pct, "max_error_pct": res.max_error_pct,
-        "modes": res.modes,
-        "not_followed": [m for m in res.modes if abs(m["error_pct"]) > max(2.0, 2 * res.rms_error_pct)],
-        "skipped_rows": skipped, "predictions": predictions,
-        "history": [{"generation": g, "rms_error_pct": 100 * v} for g, v in res.history],
-        "search": {"method": "differential_evolution + least_squares", "seed": res.options.seed,
-                   "population": res.options.population, "generations": res.options.generations,
-                   "crossover": res.options.crossover, "mutation": res.options.mutation,
-                   "weights": res.options.weights},
-    }
+    """An identification as JSON-ready data (the keys of ``identify --json``):
+    :meth:`FitResult.to_dict` with the rows left out and the predictions."""
+    d = res.to_dict()
+    head = ("parameters", "all_parameters", "effects", "correlation", "undetermined", "rms_error_pct",
+            "max_error_pct", "modes", "not_followed")
+    return {**{k: d[k] for k in head}, "skipped_rows": skipped, "predictions": predictions,
+            "history": d["history"], "search": d["search"]}
