@@ -13,7 +13,7 @@ import numpy as np
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.tyre.effects import get_effect, resolve_effects
 from tiremodal_cli.tyre.fit_types import DEFAULT_BOUNDS, FitOptions
-from tiremodal_cli.tyre.frequencies import model_frequencies
+from tiremodal_cli.tyre.frequencies import model_frequencies, nearer_rim_mode
 from tiremodal_cli.tyre.model import TyreParameters
 from tiremodal_cli.tyre.stacked import ParamStack, stacked_branch_frequencies, stacked_point_mass_pairs
 
@@ -123,4 +123,7 @@ class Evaluator:
             pick = np.where(self.mem_code >= 0, self.mem_code, nearer)
             return np.take_along_axis(pair, pick[..., None], 2)[..., 0]
         F = stacked_branch_frequencies(self.ns, P, eff)
-        return F[:, np.arange(self.ns.size), self.col]
+        out = F[:, np.arange(self.ns.size), self.col]
+        if self.base.m_w is None or not np.any(self.ns == 1):
+            return out
+        return nearer_rim_mode(out, self.ns, self.br, self.f_meas, F[:, np.argmax(self.ns == 1), 3])

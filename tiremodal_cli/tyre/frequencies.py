@@ -14,7 +14,7 @@ from tiremodal_cli.tyre.effects import resolve_effects
 from tiremodal_cli.tyre.model import TyreParameters, closed_form_hz, branch_label, fixed_point_hz, generalised_length, pair_eigenvalues, solve_block, stacked_blocks
 from tiremodal_cli.tyre.solve import solve_modes
 
-__all__ = ['branch_frequencies', 'point_mass_pairs', 'model_frequencies']
+__all__ = ['branch_frequencies', 'point_mass_pairs', 'model_frequencies', 'rim_mode_hz', 'nearer_rim_mode']
 
 
 def branch_frequencies(ns, p: TyreParameters, effects=()) -> np.ndarray:
@@ -127,6 +127,45 @@ def point_mass_pairs(p: TyreParameters, m_a: float, n_max: int, effects=()) -> d
     return out
 
 
+def rim_mode_hz(p: TyreParameters, effects=()) -> float:
+    """The n = 1 rim mode's frequency (Hz) of a free rim (block effects only); NaN for a
+    clamped rim (``m_w`` None) or where no n = 1 mode is labelled "rim"."""
+    if p.m_w is None:
+        return float("nan")
+    eff = tuple(effects)
+    blk, w2, vecs = solve_block(1, p, eff, any(e.frequency_dependent for e, _ in eff))
+    md = np.diag(blk.M)
+    f = [np.sqrt(w2[r]) / (2 * np.pi) for r in range(len(w2)) if branch_label(vecs[:, r], blk.dofs, md) == "rim"]
+    return float(min(f)) if f else float("nan")
+
+
+def nearer_rim_mode(out, ns, br, meas_hz, f_rim):
+    """A measured n = 1 "same" mode matched to the model's rim mode where that is nearer
+    (in frequency ratio) than the model's same-direction mode.
+
+    The modal stage names a branch by the sign of the tread's and the sidewall's motion;
+    in the rim mode of a free rim they move in phase, so a measured rim mode reads as
+    n = 1 "same". The model labels that mode "rim" (its rim holds the largest share of the
+    kinetic energy): either model mode is what a measured n = 1 "same" can be, and the
+    one it is is the nearer (the rule of an unlabelled split-pair member). ``out`` (k,)
+    or (S, k); ``f_rim`` scalar or (S,). Without measured frequencies or a rim: ``out``.
+    """
+    if meas_hz is None:
+        return out
+    rows = (np.asarray(ns) == 1) & (np.asarray(br) == "same")
+    f_rim = np.asarray(f_rim, dtype=float)
+    if not rows.any() or not np.any(np.isfinite(f_rim)):
+        return out
+    out = np.array(out, dtype=float)
+    f_m = np.asarray(meas_hz, dtype=float)[rows]
+    same = out[..., rows]
+    rim = np.broadcast_to(f_rim[..., None], same.shape) if f_rim.ndim else np.full(same.shape, float(f_rim))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        use = np.isfinite(rim) & ~(np.abs(np.log(same / f_m)) <= np.abs(np.log(rim / f_m)))
+    out[..., rows] = np.where(use, rim, same)
+    return out
+
+
 def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=None, meas_hz=None) -> np.ndarray:
     """Model frequencies (Hz) of the given (n, branch) pairs.
 
@@ -147,6 +186,9 @@ def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=Non
     -------
     freq_hz : (k,) ndarray — NaN where the model has no such mode.
 
+    A measured n = 1 "same" mode is the model's same-direction or rim mode, whichever is
+    nearer ``meas_hz`` (:func:`nearer_rim_mode`; not with a coupling effect).
+
     The seed model uses the closed form (and the 3 × 3 problem for n = 1 with a rim);
     block effects the stacked solver :func:`tiremodal_cli.tyre.model.branch_frequencies`;
     coupling effects the assembled problem of :func:`tiremodal_cli.tyre.model.solve_modes`.
@@ -165,7 +207,7 @@ def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=Non
             for i in np.flatnonzero((ns == 1) & ~cavity):
                 sel = (m.n == 1) & (np.array(m.branch) == br[i]) & (np.array(m.harmonic) == "cos")
                 out[i] = m.freq_hz[sel][0] if sel.any() else np.nan
-        return out
+        return nearer_rim_mode(out, ns, br, meas_hz, rim_mode_hz(p, eff))
     if not any(e.couple is not None for e, _ in eff):
         bf = branch_frequencies(ns, p, eff)
         out = np.where(br == "opposite", bf[:, 1], bf[:, 0])
@@ -173,7 +215,7 @@ def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=Non
             m = solve_modes(p, n_max=1, effects=eff)
             fc = m.freq_hz[np.array(m.branch) == "cavity"]
             out[cavity] = fc.min() if fc.size else np.nan
-        return out
+        return nearer_rim_mode(out, ns, br, meas_hz, rim_mode_hz(p, eff))
     return _coupled_frequencies(p, ns, br, eff, members, meas_hz)
 
 

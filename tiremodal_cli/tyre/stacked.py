@@ -123,15 +123,16 @@ def stacked_branch_frequencies(ns, p: ParamStack, effects=()) -> np.ndarray:
 
     Returns
     -------
-    freq_hz : (S, k, 3) ndarray, Hz — ``[..., 0]`` same, ``[..., 1]`` opposite,
-        ``[..., 2]`` the lowest cavity mode (NaN where there is no such mode)
+    freq_hz : (S, k, 4) ndarray, Hz — ``[..., 0]`` same, ``[..., 1]`` opposite,
+        ``[..., 2]`` the lowest cavity mode, ``[..., 3]`` the rim mode of a free rim (n = 1
+        only; NaN where there is no such mode)
     """
     ns = np.asarray(ns, dtype=int)
     eff = tuple(effects)
     if any(e.couple is not None for e, _ in eff):
         raise ParameterError("stacked_branch_frequencies takes block effects only")
     S = p.k_r1.size
-    out = np.full((S, ns.size, 3), np.nan)
+    out = np.full((S, ns.size, 4), np.nan)
     freq_dep = any(e.frequency_dependent for e, _ in eff)
     uniq = np.unique(ns)
     rest = uniq[uniq != 1]
@@ -160,7 +161,7 @@ def stacked_branch_frequencies(ns, p: ParamStack, effects=()) -> np.ndarray:
         blk, w2, vecs = _stack_modes(np.ones(S, dtype=int), p, eff, freq_dep)
         lab = _stack_labels(vecs, blk.dofs, blk.M)
         f1 = np.sqrt(w2) / (2 * np.pi)
-        for col in range(3):
+        for col in range(4):
             cand = np.where(lab == col, f1, np.inf).min(axis=1)
             out[:, ns == 1, col] = np.where(np.isfinite(cand), cand, np.nan)[:, None]
     return out
