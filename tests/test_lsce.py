@@ -395,3 +395,23 @@ def test_method_both_marks_confirmed_modes(tmp_path):
     for ref in BEAM_MODES:
         k = int(np.argmin([abs(m["frequency_hz"] / ref - 1) for m in modes]))
         assert abs(modes[k]["frequency_hz"] / ref - 1) < 1e-3 and modes[k]["confirmed"] is True, (ref, modes[k])
+
+
+def test_poly_reference_orders_in_threads_give_the_same_poles_and_table(exact_sim):
+    """The model orders solved in worker threads (issue 19) are each computed as alone: the
+    poles, participation factors and the whole modal table equal the one-thread ones."""
+    from tiremodal_cli.modal.lsce import sweep_poly
+
+    rng = np.random.default_rng(7)
+    irf = rng.standard_normal((3, 2, 700)) + 1j * rng.standard_normal((3, 2, 700))
+    one = sweep_poly(irf, range(1, 16), 1e-3, 10.0, 100.0)
+    two = sweep_poly(irf, range(1, 16), 1e-3, 10.0, 100.0, workers=2)
+    assert [p.order for p in two] == list(range(1, 16))
+    for a, b in zip(one, two):
+        np.testing.assert_array_equal(a.s, b.s)
+        np.testing.assert_array_equal(a.participation, b.participation)
+    frf = compute_frf(exact_sim.measurement)
+    t1, _ = modal_table_from_frf(frf, ModalOptions(workers=1))
+    t2, _ = modal_table_from_frf(frf, ModalOptions(workers=2))
+    np.testing.assert_array_equal(t1.frequency_hz, t2.frequency_hz)
+    np.testing.assert_array_equal(t1.damping_ratio, t2.damping_ratio)

@@ -13,10 +13,11 @@ The Python API (``docs/api.md``)::
 
 Every name of :data:`__all__` is imported from its module when first used (so that
 ``tiremodal --help`` starts without numpy, scipy or h5py); ``tm.<name>`` is the same
-object as ``tiremodal_cli.<module>.<name>``. Three functions carry names other than their
-own, because a module of the package has theirs (and the import system sets
-``tiremodal_cli.<module>`` to the module): ``simulate_test`` (``simulate.simulate``),
-``diagnose_modes`` (``diagnose.diagnose``), ``write_report`` (``report.report``). Array and unit conventions are written down
+object as ``tiremodal_cli.<stage>.<module>.<name>`` (the table below; the stages in
+``docs/architecture.md``). Three functions carry names other than their own, because a
+module or package of the package has theirs: ``simulate_test`` (``tyre.simulate.simulate``),
+``diagnose_modes`` (``diagnose.diagnose``), ``write_report`` (``workflow.report.report``).
+Array and unit conventions are written down
 once, in ``docs/conventions.md``.
 """
 
