@@ -137,6 +137,28 @@ def _candidates(op: OrderPoles, band: Band, zeta_max: float):
     return np.flatnonzero(keep)
 
 
+def _statuses(op: OrderPoles, idx, shapes, prev, opt) -> list[str]:
+    """Each candidate pole's status against the previous order's nearest pole: "stable"
+    (frequency, damping and shape within tolerance), "fd", "fv", "f", or "new" (its
+    frequency moved, or the first order). The MAC is computed only where it decides."""
+    if not prev:
+        return ["new"] * len(idx)
+    f, z = op.freq_hz[idx], op.damping_ratio[idx]
+    pf = np.array([q.freq_hz for q in prev])
+    pz = np.array([q.damping_ratio for q in prev])
+    j = np.argmin(np.abs(pf[None, :] - f[:, None]), axis=1) if len(idx) else np.zeros(0, dtype=int)
+    ok_f = np.abs(pf[j] - f) <= opt.tol_freq * f
+    ok_d = np.abs(pz[j] - z) <= opt.tol_damping * z
+    out = []
+    for k in range(len(idx)):
+        if not ok_f[k]:
+            out.append("new")
+            continue
+        ok_v = mac(prev[j[k]].shape, shapes[k]) >= opt.tol_mac
+        out.append("stable" if ok_d[k] and ok_v else "fd" if ok_d[k] else "fv" if ok_v else "f")
+    return out
+
+
 def stabilize(band: Band, sweep_result: list[OrderPoles], opt: StabilizationOptions = StabilizationOptions()) -> Diagram:
     """Stability status of every candidate pole, clustering and selection."""
     poles, prev = [], None
@@ -145,20 +167,10 @@ def stabilize(band: Band, sweep_result: list[OrderPoles], opt: StabilizationOpti
         # poly-reference poles carry participation vectors: those tell the members of a
         # split pair apart where a shape fitted per order would mix them
         shapes = op.participation[idx] if op.participation is not None else _shapes(band, op.s[idx])
-        cur = []
-        for k, i in enumerate(idx):
-            sp = StablePole(op.order, complex(op.s[i]), float(op.freq_hz[i]), float(op.damping_ratio[i]),
-                            shapes[k], "new", None if op.participation is None else op.participation[i])
-            if prev:
-                pf = np.array([q.freq_hz for q in prev])
-                j = int(np.argmin(np.abs(pf - sp.freq_hz)))
-                q = prev[j]
-                ok_f = abs(q.freq_hz - sp.freq_hz) <= opt.tol_freq * sp.freq_hz
-                ok_d = abs(q.damping_ratio - sp.damping_ratio) <= opt.tol_damping * sp.damping_ratio
-                ok_v = mac(q.shape, sp.shape) >= opt.tol_mac
-                sp.status = ("stable" if ok_f and ok_d and ok_v else "fd" if ok_f and ok_d else
-                             "fv" if ok_f and ok_v else "f" if ok_f else "new")
-            cur.append(sp)
+        status = _statuses(op, idx, shapes, prev, opt)
+        cur = [StablePole(op.order, complex(op.s[i]), float(op.freq_hz[i]), float(op.damping_ratio[i]),
+                          shapes[k], status[k], None if op.participation is None else op.participation[i])
+               for k, i in enumerate(idx)]
         poles.extend(cur)
         prev = cur
     orders = [op.order for op in sweep_result]
