@@ -36,3 +36,27 @@ def test_simulated_rim_is_read_from_its_channel(m_w, clamped):
     r = compute_frf(sim.measurement, FRFOptions(band_hz=(0.0, 400.0)))
     p, why = rim_condition(r, TyreParameters())
     assert (p.m_w is None) == clamped, why
+
+
+def test_a_dead_channel_is_stored_as_a_documented_null_not_nan(tmp_path):
+    """The clamped rim's silent channel: frf.h5 holds no NaN (issue 14) — its FRFs and
+    coherence are the fill value 0, named with their reason in the datasets' attributes and
+    in ``channel_live`` — and reading the file gives the estimate's NaN back."""
+    import h5py
+    import numpy as np
+
+    from tiremodal_cli.io.frffile import read_frf, write_frf
+
+    sim = simulate(SimulationConfig(n_points=8, n_hits=2, n_samples=1024, sample_rate=1024.0, noise=0.005, seed=5))
+    r = compute_frf(sim.measurement, FRFOptions(band_hz=(0.0, 400.0)))
+    dead = [i for i, c in enumerate(r.channel_name) if c in r.dead_channels]
+    assert dead and np.isnan(r.H[dead]).all()
+    write_frf(tmp_path / "frf.h5", r)
+    with h5py.File(tmp_path / "frf.h5", "r") as h:
+        for name in ("frf", "coherence"):
+            assert np.isfinite(h[name][()]).all()
+            assert (h[name][()][dead] == 0).all() and h[name].attrs["null_reason"].startswith("dead channel")
+        assert list(np.flatnonzero(~h["channel_live"][()])) == dead
+    back = read_frf(tmp_path / "frf.h5")
+    np.testing.assert_array_equal(back.H, r.H)  # NaN where the estimate has NaN, the rest exact
+    np.testing.assert_array_equal(back.coherence, r.coherence)

@@ -7,7 +7,10 @@ exponential window), ``tiremodal_version``, ``input_file``, ``input_sha256``, ``
 (n_channels, n_points, n_freq) complex128, ``coherence`` (same shape, float64),
 ``n_averages`` and ``point_index`` (n_points,), ``point_angle`` (n_points,) rad,
 ``channel_name``, ``channel_location`` (n_channels,) str, ``channel_angle`` (n_channels,) rad,
-``dead_channels`` (str).
+``dead_channels`` (str), ``channel_live`` (n_channels,) bool: false for a dead channel, whose
+entries in ``frf`` and ``coherence`` hold the fill value 0 — both datasets say so in their
+attributes ``null_fill``, ``null_where``, ``null_reason`` (no NaN is stored; :func:`read_frf`
+gives NaN there in memory, as the estimate has it).
 """
 
 from __future__ import annotations
@@ -65,8 +68,14 @@ def write_frf(path, r: FRFResult, *, input_file: str = "", input_sha256: str = "
             a["meta"] = json.dumps(r.meta)
             a["rejections"] = json.dumps([x.to_dict() for x in r.rejections])
             h.create_dataset("freq_hz", data=r.freq_hz)
-            h.create_dataset("frf", data=r.H.astype(np.complex128))
-            h.create_dataset("coherence", data=r.coherence)
+            live = np.array([c not in set(r.dead_channels) for c in r.channel_name], dtype=bool)
+            h.create_dataset("channel_live", data=live)
+            h["channel_live"].attrs["meaning"] = DEAD_REASON
+            for name, arr in (("frf", r.H.astype(np.complex128)), ("coherence", r.coherence)):
+                h.create_dataset(name, data=_fill_dead(arr, live, name))
+                h[name].attrs["null_fill"] = 0.0
+                h[name].attrs["null_where"] = "channels whose channel_live is false"
+                h[name].attrs["null_reason"] = DEAD_REASON
             h.create_dataset("n_averages", data=r.n_averages)
             h.create_dataset("point_index", data=r.point_index)
             h.create_dataset("point_angle", data=r.point_angle)
@@ -75,6 +84,21 @@ def write_frf(path, r: FRFResult, *, input_file: str = "", input_sha256: str = "
             h.create_dataset("channel_angle", data=r.channel_angle)
             h.create_dataset("dead_channels", data=list(r.dead_channels), dtype=s)
     return Path(path)
+
+
+#: why a dead channel's FRFs and coherence are not numbers (an attribute of each dataset)
+DEAD_REASON = ("dead channel: no signal in any hit (listed in dead_channels); nothing was estimated for it, "
+               "its entries hold the fill value 0 (read_frf gives NaN)")
+
+
+def _fill_dead(arr, live, name):
+    """The (n_channels, …) array with its dead channels set to 0; any other non-finite value
+    is a bug of the estimate (a live channel's FRF is always defined) and is refused."""
+    out = np.array(arr, copy=True)
+    out[~live] = 0
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"FRF file: {name} holds non-finite values on a live channel")
+    return out
 
 
 def read_frf(path) -> FRFResult:
@@ -110,6 +134,7 @@ def read_frf(path) -> FRFResult:
         try:
             d = {k: h[k][()] for k in need if k not in ("channel_name", "channel_location", "dead_channels")}
             names, locs, dead = (read_strings(h[k]) for k in ("channel_name", "channel_location", "dead_channels"))
+            live = h["channel_live"][()].astype(bool) if "channel_live" in h else None
             a = dict(h.attrs)
         except (OSError, ValueError, TypeError) as exc:
             raise DataFormatError(f"{where}: cannot read ({exc}); the file may be truncated") from None
@@ -119,6 +144,12 @@ def read_frf(path) -> FRFResult:
             or len(names) != n_c or d["point_angle"].shape != (n_p,):
         raise DataFormatError(f"{where}: sizes do not match (frf {H.shape}, freq_hz {d['freq_hz'].shape}, "
                               f"{len(names)} channels, {d['point_angle'].shape[0]} points)")
+    if live is not None:  # the dead channels' fill value back to NaN in memory (older files stored NaN)
+        if live.shape != (n_c,):
+            raise DataFormatError(f"{where}: channel_live has {live.size} entries for {n_c} channels")
+        H, coh = np.array(H, dtype=complex), np.array(d["coherence"], dtype=float)
+        H[~live], coh[~live] = np.nan, np.nan
+        d["coherence"] = coh
     rej = tuple(Rejection(**x) for x in json.loads(_s(a.get("rejections", "[]"))))
     tau = a.get("exp_tau_s")
     return FRFResult(freq_hz=d["freq_hz"], H=H, coherence=d["coherence"], n_averages=d["n_averages"],
