@@ -21,7 +21,9 @@
   |Re ρ| / (‖t‖‖s‖) with ρ = tᴴs the tread–sidewall product (1: perfectly in or out of
   phase). A mode whose tread barely moves (high-n same-direction modes) gets a low one.
 * **dispersion order**: of two modes of a branch whose orders fall as the frequency rises,
-  the less significant is flagged ``in_order = False`` (``identify`` leaves it out).
+  the less significant is flagged ``in_order = False`` (``identify`` leaves it out) — but
+  an n = 1 "same" below the n = 0 mode is not compared with it: a free rim's mode reads as
+  n = 1 "same" (tread and sidewall in phase) and lies off the branch, often below n = 0.
 * **split pairs**: two modes with one (n, branch) within 5 % in frequency, both in their
   branch's dispersion order, are the cos/sin members of a pair split by a broken symmetry;
   both are reported, with the splitting (a third mode of that (n, branch) out of order —
@@ -238,6 +240,8 @@ def _in_dispersion_order(freq_hz, reads: list[_Reading], ns: list[int], signific
     for r in range(len(reads)):
         for q in range(len(reads)):
             if q != r and reads[q].branch == reads[r].branch and freq_hz[q] > freq_hz[r] and ns[q] < ns[r]:
+                if reads[r].branch == "same" and ns[r] == 1 and ns[q] == 0:
+                    continue  # an n = 1 "same" below n = 0 may be a free rim's mode, off the branch
                 in_order[r if sig[q] >= sig[r] else q] = False
     return in_order
 

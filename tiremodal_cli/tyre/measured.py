@@ -43,7 +43,8 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
     members of a split pair (one n and branch twice, within 5 %) enter as their mean
     frequency (``split_pairs="mean"``) or as two modes marked ``member`` "lower" and
     "upper" (``split_pairs="members"``, for ``diagnose``); of one n and branch twice
-    farther apart, the more significant row stays.
+    farther apart, the more significant row stays — and for n = 1 "same" also the most
+    significant of those below it (a free rim's mode reads as n = 1 "same").
     Returns the modes and the rows left out with their reasons (each with its ``row``
     number, ``frequency_hz``, and ``n``/``branch`` where the row has them).
     """
@@ -55,12 +56,27 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
             # order (an alias, a spurious pole): keep the strongest, skip the rest
             vals.sort(key=lambda v: -v[3])
             far = [v for v in vals[1:] if abs(v[0] / vals[0][0] - 1) > 0.05]
+            rim = _rim_candidate(n, b, vals[0], far)
+            if rim is not None:  # a second n = 1 "same" below the first: the rim mode's place
+                far.remove(rim)
+                modes.extend(_modes_of(n, b, [rim], split_pairs, f"{source} (n = 1 same below another: a rim mode?)"))
             for v in far:
                 skipped.append({"row": v[4], "frequency_hz": v[0], "n": n, "branch": b,
                                 "reason": f"n={n} {b} already at {vals[0][0]:.2f} Hz (not a split pair: > 5 % apart)"})
             vals = [v for v in vals if v not in far]
         modes.extend(_modes_of(n, b, vals, split_pairs, source))
     return modes, skipped
+
+
+def _rim_candidate(n, b, first, far):
+    """Of the rows of n = 1 "same" far (> 5 %) from the strongest one, the strongest below it:
+    a free rim's mode reads as n = 1 "same" and lies below the same-direction n = 1 mode, so
+    n = 1 "same" may hold two modes (the fit matches each to the model's nearer one,
+    :func:`tiremodal_cli.tyre.frequencies.nearer_rim_mode`). None for any other (n, branch)."""
+    if (n, b) != (1, "same"):
+        return None
+    below = [v for v in far if v[0] < first[0]]
+    return max(below, key=lambda v: v[3]) if below else None
 
 
 def _parse_rows(rows, min_confidence, min_mpc):
