@@ -233,8 +233,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1194 / 1342 (89 %) | 32 / 1557 (2.1 %) | 0 | 14 / 14 | 5 / 14 | |
 | 2026-11-23, end of session 5 | the merge by the poles' data, alias rules (#14); the robust base fit, set-aside modes as evidence, extensible belt, rim fixture, the ring terms of the tangential effect (#15) | paper | 1133 / 1212 (93 %) | 33 / 1440 (2.3 %) | 0 | 14 / 14 | 8 / 13 | 3.3 min |
 | | | ring | 1252 / 1334 (94 %) | 30 / 1637 (1.8 %) | 0 | 14 / 14 | 6 / 14 | |
-| 2026-11-23, end of session 6 | the layout by stage (#18: the same modes and fits, case by case); a measured n = 1 "same" may be the model's rim mode (#15); the modal stage's orders in threads (#19) | paper | 1133 / 1212 (93 %) | 33 / 1440 (2.3 %) | 0 | 14 / 14 | 9 / 13 | 3.6 min |
-| | | ring | 1252 / 1334 (94 %) | 30 / 1637 (1.8 %) | 0 | 14 / 14 | 6 / 14 | |
+| 2026-11-23, end of session 6 | the layout by stage (#18: the same modes and fits, case by case); the rim mode: a measured n = 1 "same" may be the model's rim mode, and is kept in the fit below n = 0 (#15); the modal stage's orders in threads (#19) | paper | 1133 / 1212 (93 %) | 33 / 1440 (2.3 %) | 0 | 14 / 14 | 9 / 13 | 3.4 min |
+| | | ring | 1252 / 1334 (94 %) | 30 / 1637 (1.8 %) | 0 | 14 / 14 | 7 / 14 | |
 """
 
 
