@@ -38,7 +38,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from tiremodal_cli.conventions import OPPOSITE, SAME
-from tiremodal_cli.modal.spatial import harmonic_design, max_order
+from tiremodal_cli.modal.spatial import grid_design, grid_points, max_order
 
 __all__ = ["Classification", "classify"]
 
@@ -73,12 +73,7 @@ def _real(v):
 def order_energy(shape_over_points, angles_rad) -> dict[int, float]:
     """Share of a real shape's energy in each circumferential order (least squares)."""
     x = np.asarray(shape_over_points, dtype=float)
-    n_p = x.size
-    n_max = max_order(n_p)
-    D, names = harmonic_design(angles_rad, n_max)
-    while D.shape[1] > n_p:
-        n_max -= 1
-        D, names = harmonic_design(angles_rad, n_max)
+    D, names = grid_design(angles_rad)  # with points missing from a grid: the minimum-norm fit
     coef = np.linalg.lstsq(D, x, rcond=None)[0]
     energy: dict[int, float] = {}
     for c, (n, _) in zip(coef, names):
@@ -142,7 +137,7 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     locs = list(channel_location)
     it = locs.index("tread")
     isw = locs.index("sidewall") if "sidewall" in locs else None
-    n_p = len(point_angle)
+    n_p = grid_points(point_angle)  # points failed on a uniform grid alias as the whole grid
     reads = [_read(shapes[r], it, isw, point_angle) for r in range(len(freq_hz))]
     ns = _resolve_aliases(_Modes(freq_hz, reads, n_p, significance, significance_group))
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)

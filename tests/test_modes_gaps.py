@@ -1,0 +1,105 @@
+"""A roving-hammer test whose points failed (every hit of a point rejected) keeps its grid.
+
+Truths of discrete Fourier analysis and of the simulated tyre, not of the code: the points
+left of a uniform grid alias as the whole grid does (n and N − n on N points, whatever is
+missing); the grid's harmonics are orthogonal over the whole grid, so over a subset the
+minimum-norm fit keeps each order mostly in its own group and reproduces the data at the
+points; and the modes of a simulated tyre with points removed are those of the tyre.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from tiremodal_cli.frf.estimate import compute_frf
+from tiremodal_cli.modal.classify import classify
+from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
+from tiremodal_cli.modal.spatial import decompose, grid_points, leakage
+from tiremodal_cli.tyre.model import TyreParameters
+from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
+
+# the ring case of the validation matrix that read wholesale wrong: 9 of 40 points failed
+FAILED_40 = [6, 12, 13, 16, 20, 21, 24, 30, 35]
+
+
+def _subset(n_grid, failed, offset=0.0):
+    keep = np.array([i for i in range(n_grid) if i not in failed])
+    return offset + 2 * np.pi * keep / n_grid
+
+
+@pytest.mark.parametrize("offset", [0.0, 0.3])
+def test_the_grid_of_points_with_gaps_rolled_or_decreasing(offset):
+    th = _subset(40, FAILED_40, offset)
+    for angles in (th, np.roll(th, 7), th[::-1]):
+        assert grid_points(angles) == 40
+    assert grid_points(_subset(24, [1, 14, 15, 17, 23])) == 24
+    assert grid_points(np.sort(np.random.default_rng(3).uniform(0, 2 * np.pi, 10))) == 10  # on no grid
+
+
+def test_gaps_keep_each_order_in_its_group_and_reproduce_the_data():
+    """31 of 40 points: a pattern of order m ≤ 20 is reproduced exactly at the points, its
+    own group holds most of it, and no other group more than the stated leakage; on the
+    complete grid the leakage is zero."""
+    th = _subset(40, FAILED_40)
+    leak = leakage(th)
+    rng = np.random.default_rng(4)
+    for m in (0, 3, 11, 19):
+        phi = rng.uniform(0, 2 * np.pi)
+        H = np.cos(m * th + phi)[None, :, None] * np.ones((1, 1, 2))
+        groups = decompose(H, th)
+        assert sorted(groups) == list(range(21))
+        total = sum(back @ rows for rows, back in groups.values()).reshape(H.shape)
+        np.testing.assert_allclose(total, H, atol=1e-10)
+        amp = {n: np.linalg.norm(rows[:, 0]) for n, (rows, _) in groups.items()}
+        assert amp[m] > 0.6 * max(abs(np.cos(phi)), abs(np.sin(phi)), 0.7)  # its own group holds most of it
+        for n in amp:
+            if n != m:
+                assert amp[n] <= leak[(n, m)] * amp[m] * (1 + 1e-9)
+    assert max(leakage(2 * np.pi * np.arange(40) / 40).values()) < 1e-12
+    assert 0.05 < max(leak.values()) < 0.5
+
+
+def test_aliases_of_a_grid_with_gaps_are_those_of_the_whole_grid():
+    """On 31 of 40 points the same branch's n = 4 … 20 then 36 (spatial order 4) reads as
+    n = 36 = 40 − 4, not 27 = 31 − 4."""
+    th = _subset(40, FAILED_40)
+    orders = list(range(4, 21)) + [36]
+    freq = 100.0 + 3.0 * np.arange(len(orders))
+    shapes = np.array([[np.cos(n * th), 0.8 * np.cos(n * th)] for n in orders], dtype=complex)
+    c = classify(freq, shapes, th, ["tread", "sidewall"], significance=np.ones(len(orders)))
+    assert [x.n for x in c] == orders
+    assert c[-1].aliased and c[-1].n_spatial == 4
+
+
+@pytest.fixture(scope="module")
+def gappy():
+    """The seed model on 24 points, one hit, five points failed (as a bounced or clipped
+    hit leaves them), through frf and lsce in 40–250 Hz."""
+    s = simulate(SimulationConfig(n_points=24, n_hits=1, sample_rate=1024.0, n_samples=2048, noise=0.005, seed=5,
+                                  params=TyreParameters(m_w=1000.0)))
+    r = compute_frf(s.measurement)
+    keep = np.array([i for i in range(24) if i not in (1, 14, 15, 17, 23)])
+    r = dataclasses.replace(r, H=r.H[:, keep], coherence=r.coherence[:, keep], n_averages=r.n_averages[keep],
+                            point_index=r.point_index[keep], point_angle=r.point_angle[keep])
+    table, res = modal_table_from_frf(r, ModalOptions(band_hz=(40, 250)))
+    return s.truth, table, res
+
+
+def test_modes_of_a_test_with_failed_points(gappy):
+    """Every same n ≤ 7 and opposite n = 4 … 8 mode in the band found once within 0.3 %
+    with its n and branch (no copy seen through the gaps in another order group is
+    reported beside it). Known limit: the opposite n = 0 … 3, four modes within 3 Hz (less
+    than half a bandwidth), are not all resolved with 5 of 24 points missing."""
+    truth, t, res = gappy
+    cos = [m for m in truth["modes"] if m["harmonic"] == "cos"]
+    want = [m for m in cos if 45 <= m["frequency_hz"] <= 245
+            and ((m["branch"] == "same" and m["n"] <= 7) or (m["branch"] == "opposite" and 4 <= m["n"] <= 8))]
+    assert len(want) == 8 + 5
+    for m in want:
+        near = np.flatnonzero(np.abs(t.frequency_hz / m["frequency_hz"] - 1) <= 3e-3)
+        ok = [k for k in near if t.n[k] == m["n"] and t.branch[k] == m["branch"]]
+        assert len(ok) == 1 and len(near) == 1, (m["n"], m["branch"], m["frequency_hz"], t.frequency_hz[near], t.n[near])
+    assert any("missing points" in d["reason"] for d in res.rejected)
