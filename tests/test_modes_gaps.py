@@ -37,6 +37,8 @@ def test_the_grid_of_points_with_gaps_rolled_or_decreasing(offset):
         assert grid_points(angles) == 40
     assert grid_points(_subset(24, [1, 14, 15, 17, 23])) == 24
     assert grid_points(np.sort(np.random.default_rng(3).uniform(0, 2 * np.pi, 10))) == 10  # on no grid
+    # 48 points every 7.5° stored in whole degrees lie on the 360-point grid: no failed points
+    assert grid_points(np.radians(np.round(np.arange(48) * 7.5))) == 48
 
 
 def test_gaps_keep_each_order_in_its_group_and_reproduce_the_data():

@@ -34,16 +34,17 @@ def grid_points(angles_rad) -> int:
 
     A test whose points failed (every hit of a point rejected) keeps its grid: 31 points
     left of a 40-point grid alias as the 40 do (n and 40 − n), not as 31 would. The grid
-    is the smallest N ≥ the number of points, up to 8 times it, with every angle within
-    :data:`GRID_TOL_STEPS` of a step of 2π/N from the first; points on no such grid are
-    their own (N = the number of points).
+    is the smallest N ≥ the number of points, up to twice it (at most half the grid
+    failed: points rounded to whole degrees would otherwise lie on a 360-point "grid"),
+    with every angle within :data:`GRID_TOL_STEPS` of a step of 2π/N from the first;
+    points on no such grid are their own (N = the number of points).
     """
     th = np.asarray(angles_rad, dtype=float)
     n_p = th.size
     if n_p < 2 or not np.all(np.isfinite(th)):
         return n_p
     steps = (th - th[0]) / (2 * np.pi)
-    for n in range(n_p, 8 * n_p + 1):
+    for n in range(n_p, 2 * n_p + 1):
         x = steps * n
         if np.max(np.abs(x - np.round(x))) <= GRID_TOL_STEPS and np.unique(np.mod(np.round(x), n)).size == n_p:
             return n
