@@ -61,24 +61,10 @@ class GroupFit:
 
 
 def _significances(data: GroupData, residues, s):
-    """Each mode's significance in the physical FRFs and within its group (all sensors
-    together: the reported values), and the share that decides whether it is kept: the
-    larger of the two, or its share of one sensor's physical FRFs if larger still (a mode
-    one sensor sees clearly is a mode although another sensor's far stronger response
-    swamps it in the sum: the sidewall's own modes, whose tread barely moves). One
-    sensor's share within the group is not used: a group's single sensor can hold almost
-    nothing at a frequency, and a pole fitted there takes a large share of nothing (on
-    the validation matrix it added modes of 0.1 % physical share in six cases)."""
+    """Each mode's significance in the physical FRFs, and within its group."""
     sig = np.array([significance(data.freq, data.H_phys, data.back @ residues[:, [k]], s[[k]], form=data.form)[0]
                     for k in range(s.size)])
-    own = significance(data.freq, data.rows, residues, s, form=data.form)
-    keep = np.maximum(sig, own)
-    n_p = data.H_phys.shape[0] // data.n_c  # the physical FRFs are channel-major
-    for c in range(data.n_c if data.n_c > 1 else 0):
-        phys = slice(c * n_p, (c + 1) * n_p)
-        keep = np.maximum(keep, [significance(data.freq, data.H_phys[phys], (data.back @ residues[:, [k]])[phys],
-                                              s[[k]], form=data.form)[0] for k in range(s.size)])
-    return sig, own, keep
+    return sig, significance(data.freq, data.rows, residues, s, form=data.form)
 
 
 def _rejection(pole, group: int, why: str) -> dict:
@@ -102,8 +88,7 @@ def fit_group(data: GroupData, s) -> tuple:
     own order group: the decomposition has taken the other orders out of the group, and a
     weak order beside a strong one of another order (the sidewall membrane's same-direction
     n = 20…30 amid the opposite branch's n = 5…12, 2–4 % of the physical response, each
-    within 0.01 % of the truth) is a mode all the same; so is a mode that one sensor sees
-    clearly (:func:`_significances`). A pole fitted to the noise of a
+    within 0.01 % of the truth) is a mode all the same. A pole fitted to the noise of a
     group that carries almost nothing fails the noise test (:func:`_above_noise`) and the
     peak test (:func:`_has_peak`) instead.
     """
@@ -113,8 +98,8 @@ def fit_group(data: GroupData, s) -> tuple:
         if s.size == 0:
             return None, s, rejected, refit
         fit = lsfd(data.freq, data.rows, s, form=data.form)
-        sig, own, keep = _significances(data, fit.residues, s)
-        r, why = _weakest(data, fit.synthesis, s, keep,
+        sig, own = _significances(data, fit.residues, s)
+        r, why = _weakest(data, fit.synthesis, s, np.maximum(sig, own),
                           lambda keep: _lsfd_synthesis(data, s[keep]))
         if r is None:
             return GroupFit(fit.residues, fit.synthesis, sig, own), s, rejected, refit
@@ -145,8 +130,8 @@ def fit_group_poly(data: GroupData, s, L) -> tuple:
             return None, s, rejected, partial(_poly_synthesis, data, Y, L)
         res3, syn3 = lsfd_participation(data.freq, Y, s, L, form=data.form)
         residues, synthesis = _harmonic_major(res3, data), _harmonic_major(syn3, data)
-        sig, own, keep = _significances(data, residues, s)
-        r, why = _weakest(data, synthesis, s, keep,
+        sig, own = _significances(data, residues, s)
+        r, why = _weakest(data, synthesis, s, np.maximum(sig, own),
                           lambda keep: _poly_synthesis(data, Y, L[keep], s[keep]))
         if r is None:
             return GroupFit(residues, synthesis, sig, own), s, rejected, partial(_poly_synthesis, data, Y, L)

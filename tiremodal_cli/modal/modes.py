@@ -47,8 +47,7 @@ class ModalOptions:
               "both" (:func:`modal_table_from_frf` runs the two and marks the modes they
               agree on as confirmed)
     min_significance : reject a mode explaining less than this share of the response at
-              its own frequency (a pole fitted to noise), in the physical FRFs and in its
-              order group, all sensors together and each sensor alone
+              its own frequency (a pole fitted to noise)
     poly : with the spatial split, sweep an order group that holds a cos and a sin
               component as two references (poly-reference LSCE, or pLSCF with
               ``method="plscf"``), so that split pairs resolve; orders 1 … ``poly_order``
