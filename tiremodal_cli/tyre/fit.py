@@ -119,7 +119,8 @@ def _start_vector(start: dict, names, logb, fallback) -> np.ndarray:
 def _search(obj: Objective, names, logb, opt: FitOptions) -> np.ndarray:
     """The optimum (log parameters): least squares from the start (``polish``), a local
     search safeguarded by a short global one (``local``), or differential evolution and a
-    least-squares polish (``global``, and any search without a start)."""
+    least-squares polish (``global``, and any search without a start; with a start, least
+    squares from it and from the extra starts as well, so that it contains the local search)."""
     x0 = _start_vector(opt.start, names, logb, logb.mean(axis=1)) if opt.start else None
     jac = lambda x: jacobian(obj.residuals_batch, x)  # noqa: E731
     # the Jacobian by central differences, its 2k points in one array call; the polish stops
@@ -146,7 +147,16 @@ def _search(obj: Objective, names, logb, opt: FitOptions) -> np.ndarray:
         tol=opt.tol, atol=0, polish=False, updating="deferred", vectorized=True, callback=obj.callback,
         init="latinhypercube", x0=x0)
     ls = scipy.optimize.least_squares(obj.residuals, de.x, **lsq)
-    return ls.x if obj.objective(ls.x) <= de.fun else de.x
+    x = ls.x if obj.objective(ls.x) <= de.fun else de.x
+    # the full search contains the local one: least squares from the start (and the extra
+    # starts) too, the lowest end wins — DE with the start in its population may still
+    # leave a narrow basin next to it unexplored (a Timoshenko tread's), and a reference
+    # search must never end above the local search it is the reference of
+    for start in ((x0,) + tuple(_start_vector(e, names, logb, x0) for e in opt.extra_starts)) if x0 is not None else ():
+        x1 = scipy.optimize.least_squares(obj.residuals, start, **lsq).x
+        if obj.objective(x1) < obj.objective(x):
+            x = x1
+    return x
 
 
 def _result(obj: Objective, x, modes, base: TyreParameters, names, logb, opt: FitOptions) -> FitResult:
