@@ -24,6 +24,7 @@ import numpy as np
 import scipy.optimize
 
 from tiremodal_cli.errors import DataFormatError, ParameterError
+from tiremodal_cli.tyre.closed_form import first_estimate
 from tiremodal_cli.tyre.evaluate import Evaluator, apply_parameters, jacobian, split_free
 from tiremodal_cli.tyre.fit_types import FitOptions, FitResult
 from tiremodal_cli.tyre.frequencies import model_frequencies
@@ -41,9 +42,15 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
     parameters, unknown parameters or bad bounds.
     """
     names, logb, base = _checked(modes, base, opt)
+    w = _weights(modes, opt)
+    if opt.search == "local" and not opt.start:
+        # no warm start: the closed-form estimate is one (or, where it does not apply, the
+        # full search runs)
+        cf = first_estimate(modes, base, tuple(names) if not (opt.effects or opt.effect_free) else (), weights=w)
+        opt = dataclasses.replace(opt, start=cf, start_from="closed form") if cf else dataclasses.replace(opt, search="global")
     obj = Objective(Evaluator(base, opt, names, np.array([m.n for m in modes]), np.array([m.branch for m in modes]),
                               [m.member for m in modes], np.array([m.frequency_hz for m in modes])),
-                    _weights(modes, opt), progress=progress, generations=opt.generations)
+                    w, progress=progress, generations=opt.generations)
     x = _search(obj, names, logb, opt)
     obj.history.append((len(obj.history) + 1, obj.objective(x)))
     return _result(obj, x, modes, base, names, logb, opt)
