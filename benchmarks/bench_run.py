@@ -9,7 +9,9 @@ machine is shared; medians of ``--repeat`` rounds), each as a user runs it: no t
 from outside (the present modal stage holds BLAS to one thread itself and solves the
 poly-reference sweeps' orders in as many threads as the BLAS pool has — two here; a batch
 job runs under a limit of one). ``tiremodal run`` on the sample is also timed from the
-shell (a fresh interpreter: start-up and imports included).
+shell (a fresh interpreter: start-up and imports included), and so is the package at
+``--previous`` (default PREVIOUS, the end of the previous session) beside the present one,
+both started the same way (``python -S``, the package's folder first on the path).
 
 Prints, for each case, the median wall time of each implementation and their ratio, and
 the model evaluations of each: for ``before`` the calls of model_frequencies (one
@@ -41,6 +43,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 BASELINE = "5c57b5d"
+#: the end of the previous session (its shell run is timed beside the present one)
+PREVIOUS = "ed64b9d"
 SAMPLE = ROOT / "sample_data" / "gl073a_sim.h5"
 TABLE_A1 = ROOT / "sample_data" / "paper_table_a1.csv"
 
@@ -144,6 +148,33 @@ def cli_run_time(out: Path) -> float:
     return time.perf_counter() - t
 
 
+def isolated_run_time(src: Path, out: Path) -> float:
+    """``run`` on the sample from the shell with the package found in ``src`` (a fresh
+    interpreter, ``-S``: no site processing, so that the editable install cannot redirect
+    the import; site-packages put on the path by hand), s. Both the present package and
+    the previous commit's are timed this way, for the same start-up."""
+    import site
+
+    code = (f"import sys; sys.path[:0] = [{str(src)!r}, {site.getsitepackages()[0]!r}]; "
+            f"from tiremodal_cli.cli.main import cli; "
+            f"cli(['run', {str(SAMPLE)!r}, '-o', {str(out)!r}, '--overwrite'])")
+    t = time.perf_counter()
+    subprocess.run([sys.executable, "-S", "-c", code], capture_output=True, check=True)
+    return time.perf_counter() - t
+
+
+def load_previous(tmp: Path, commit: str) -> Path:
+    """The package at ``commit`` extracted into ``tmp/previous`` (it imports itself as
+    ``tiremodal_cli``: absolute imports, so it runs in its own interpreter)."""
+    dest = tmp / "previous"
+    dest.mkdir()
+    data = subprocess.run(["git", "archive", commit, "tiremodal_cli"], cwd=ROOT, capture_output=True,
+                          check=True).stdout
+    with tarfile.open(fileobj=io.BytesIO(data)) as tar:
+        tar.extractall(dest, filter="data")
+    return dest
+
+
 def help_time(pkg, tmp):
     env = dict(os.environ, PYTHONPATH=f"{tmp}{os.pathsep}{ROOT}")
     code = f"from {pkg}.cli.main import cli; cli(['--help'])"
@@ -155,10 +186,13 @@ def help_time(pkg, tmp):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--previous", default=PREVIOUS, help="a commit whose shell run is timed beside the present one")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         load_before(tmp)
+        previous = load_previous(tmp, args.previous)
+        shell = {"present": [], "previous": []}
         impls = {"present": "tiremodal_cli", "before": "tiremodal_before"}
         test40 = make_test40(tmp / "test40.h5")
         counters = {k: Counter(p, k == "present") for k, p in impls.items()}
@@ -169,6 +203,8 @@ def main():
                 times[k]["help"].append(help_time(pkg, tmp))
                 if k == "present":
                     times[k].setdefault("cli", []).append(cli_run_time(tmp / "cli_out"))
+                    for which, src in (("present", ROOT), ("previous", previous))[::1 if rnd % 2 == 0 else -1]:
+                        shell[which].append(isolated_run_time(src, tmp / f"iso_{which}"))
                 counters[k].reset()
                 st, found = run_case(pkg, tmp / f"out_{k}")
                 evals[(k, "run")] = counters[k].text() + f"; {found}"
@@ -198,6 +234,8 @@ def main():
             print(f"{label.get(c, c):<22}{a:>11.3f}{b:>11.3f}{b / a:>7.1f}x")
         else:
             print(f"{label.get(c, c):<22}{a:>11.3f}{'–':>11}{'–':>8}")
+    a, b = statistics.median(shell["present"]), statistics.median(shell["previous"])
+    print(f"tiremodal run (shell, -S): present {a:.3f} s, previous ({args.previous}) {b:.3f} s, ratio {b / a:.2f}x")
     print("model evaluations and what was found:")
     names = {"run": "run (sample)", "run40": "run (40 points)", "a1": "diagnose Table A1"}
     for (k, c), v in evals.items():
