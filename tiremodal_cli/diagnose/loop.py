@@ -60,7 +60,8 @@ def _unexplained_rows(skipped, rows) -> list[dict]:
         row = rows[s["row"] - 1] if 0 < s.get("row", 0) <= len(rows) else {}
         out.append({"frequency_hz": float(s["frequency_hz"]), "n": s.get("n"), "branch": s.get("branch"),
                     "row": s.get("row"), "reason": reason,
-                    "significance": _num(row.get("significance")), "n_spatial": _num(row.get("n_spatial"))})
+                    "significance": _num(row.get("significance")), "n_spatial": _num(row.get("n_spatial")),
+                    "crowd": str(row.get("crowd", "")).strip().lower() in ("true", "1")})
     return out
 
 
