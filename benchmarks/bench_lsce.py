@@ -8,6 +8,8 @@
   selection and LSFD (more work than the baselines do);
 * ``ours by orders`` — the tyre default: the same FRFs split into circumferential orders
   first (``spatial="auto"`` with the point angles), each order swept on its own;
+* ``ours pLSCF by orders`` — the same, with the poly-reference least-squares
+  complex-frequency estimator (``ModalOptions(method="plscf")``) in place of LSCE;
 * ``sdypy LSCE`` and ``sdypy LSCF`` — ``Model(...).get_poles(method)`` with
   ``pol_order_high=120`` (poles of every order, no selection), on 0–300 Hz (sdypy 0.31
   shifts the poles of a zoomed band, so it runs unzoomed; a few more lines than ours), its
@@ -108,7 +110,7 @@ def main():
         opt = ModalOptions(band_hz=(40, 300), max_order=120, spatial="off")
         angles = 2 * np.pi * np.arange(34) / 34
         methods = ["lscf"] if args.skip_lsce else ["lscf", "lsce"]
-        times, t_sp, res, res_sp = [], [], None, None
+        times, t_sp, t_pl, res, res_sp, res_pl = [], [], [], None, None, None
         dts = {m: [] for m in methods}
         per_order = {}
         # interleaved: every round runs ours, ours by orders and sdypy's LSCF (sdypy's LSCE,
@@ -122,6 +124,10 @@ def main():
             res_sp = estimate_modes(f, H, point_angle=angles, channel_location=("tread", "sidewall", "rim"),
                                     opt=ModalOptions(band_hz=(40, 300)))
             t_sp.append(time.perf_counter() - t)
+            t = time.perf_counter()
+            res_pl = estimate_modes(f, H, point_angle=angles, channel_location=("tread", "sidewall", "rim"),
+                                    opt=ModalOptions(band_hz=(40, 300), method="plscf"))
+            t_pl.append(time.perf_counter() - t)
             for method in methods:
                 if method == "lsce" and rnd > 0:
                     continue
@@ -134,9 +140,12 @@ def main():
             sw = sweep(band, range(2, 121))
         ours = found_by_sweep([(p.freq_hz, p.damping_ratio) for p in sw], truth)
         spatial = {k for k, (fr, *_rest) in enumerate(truth) if np.min(np.abs(res_sp.freq_hz / fr - 1)) < 3e-3}
+        plscf = {k for k, (fr, *_rest) in enumerate(truth) if np.min(np.abs(res_pl.freq_hz / fr - 1)) < 3e-3}
         case = {"lines_in_band": n_lines, "n_frf": int(H.shape[0] * H.shape[1]), "ours_s": float(np.median(times)),
                 "ours_found_in_sweep": len(ours), "ours_adopted": len(adopted), "true_modes": len(truth),
-                "ours_spatial_s": float(np.median(t_sp)), "ours_spatial_adopted": len(spatial)}
+                "ours_spatial_s": float(np.median(t_sp)), "ours_spatial_adopted": len(spatial),
+                "ours_plscf_s": float(np.median(t_pl)), "ours_plscf_adopted": len(plscf),
+                "plscf_over_lsce_by_orders": float(np.median(t_pl) / np.median(t_sp))}
         for method in methods:
             theirs = found_by_sweep(per_order[method], truth)
             case[f"sdypy_{method}_s"] = float(np.median(dts[method]))
@@ -149,7 +158,8 @@ def main():
                 f"{truth[k][0]:.2f} Hz n={truth[k][2]} {truth[k][3]}" for k in theirs - spatial)
         report["cases"].append(case)
         print(f"{n_lines} lines: ours {case['ours_s']:.2f} s, found {len(ours)}/{len(truth)} in the sweep "
-              f"({len(adopted)} adopted); ours by orders {case['ours_spatial_s']:.2f} s, {len(spatial)} adopted; " +
+              f"({len(adopted)} adopted); ours by orders {case['ours_spatial_s']:.2f} s, {len(spatial)} adopted; "
+              f"ours pLSCF by orders {case['ours_plscf_s']:.2f} s, {len(plscf)} adopted; " +
               "; ".join(f"sdypy {m} {case[f'sdypy_{m}_s']:.2f} s ({case[f'sdypy_{m}_over_ours']:.1f}× ours), "
                         f"found {case[f'sdypy_{m}_found']}" for m in ("lscf", "lsce") if f"sdypy_{m}_s" in case),
               file=sys.stderr)

@@ -28,6 +28,20 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 
+def physical_limits() -> dict:
+    """{"effect.param": upper} of every parameter whose upper bound is a physical limit
+    (docs/diagnose.md, "Selection" 3): a value resting on it is determined by the limit, its
+    standard error is ~0, and two fits that both rest on it agree whatever the last digits."""
+    from tiremodal_cli.tyre.effects import EFFECTS
+
+    return {f"{e.name}.{p.name}": p.upper for e in EFFECTS.values() for p in e.parameters if p.upper_is_physical}
+
+
+def _at(value: float, limit: float) -> bool:
+    """Within 0.1 % of the limit (the search's bound tolerance, 1e-3 in log units)."""
+    return abs(value / limit - 1) <= 1e-3
+
+
 def compare(folder: str) -> dict:
     """Re-diagnose one kept run folder with the full search; compare with its diagnosis."""
     from threadpoolctl import threadpool_limits
@@ -40,41 +54,55 @@ def compare(folder: str) -> dict:
 
     run = Path(folder) / "run"
     man = json.loads((run / "run.json").read_text())
-    local = json.loads((run / "diagnosis.json").read_text())
     opts = man["options"]
     params = TyreParameters.from_mapping(man["params"]).replace(P0=man["model_P0"], m_w=man["model_m_w"])
     table = read_modal(run / "modal.h5")
-    dopt = DiagnoseOptions(seed=opts["seed"], noise_floor_pct=opts["noise_floor_pct"],
-                           max_effects=opts["max_effects"], rim=rim_state(man["summary"]["rim"]), search="global")
-    with threadpool_limits(1):
-        measured = usable_modes(to_rows(table), dopt, source="modal.h5")
-        t = time.perf_counter()
-        glob = report(diagnose(measured, params, dopt, n_points=int(table.point_angle.size)))
-        t_global = time.perf_counter() - t
+    out = {}
+    for search in ("local", "global"):
+        dopt = DiagnoseOptions(seed=opts["seed"], noise_floor_pct=opts["noise_floor_pct"],
+                               max_effects=opts["max_effects"], rim=rim_state(man["summary"]["rim"]), search=search)
+        with threadpool_limits(1):
+            measured = usable_modes(to_rows(table), dopt, source="modal.h5")
+            t = time.perf_counter()
+            out[search] = report(diagnose(measured, params, dopt, n_points=int(table.point_angle.size)))
+            out[search + "_s"] = time.perf_counter() - t
+    local, glob = out["local"], out["global"]
 
     def adopted(d):
         return list(dict.fromkeys(list(d["adopted_effects"]) + list(d["parameter_off"])))
 
     worst = 0.0
+    pinned = []
     pl, pg = local["augmented"]["parameters"], glob["augmented"]["parameters"]
     same_set = set(pl) == set(pg)
+    limits = physical_limits()
     if same_set:
         for k in pl:
+            a, b = pl[k]["value"], pg[k]["value"]
+            if k in limits and _at(a, limits[k]) and _at(b, limits[k]):
+                pinned.append(k)  # both rest on the physical limit: determined by it, the same
+                continue
+            if k in local["augmented"]["undetermined"] and k in glob["augmented"]["undetermined"]:
+                pinned.append(k)  # neither fit's modes determine it (its SE from pinv is 0, not ∞)
+                continue
             se = max(pl[k]["std_error"] or 0.0, pg[k]["std_error"] or 0.0)
-            d = abs(pl[k]["value"] - pg[k]["value"])
+            d = abs(a - b)
             worst = max(worst, d / se if se > 0 else (0.0 if d == 0 else float("inf")))
     return {"case": Path(folder).name, "local": adopted(local), "global": adopted(glob),
             "same_effects": adopted(local) == adopted(glob) and same_set, "worst_se": worst,
             "rms_local": local["augmented"]["rms_error_pct"], "rms_global": glob["augmented"]["rms_error_pct"],
-            "global_s": t_global}
+            "global_s": out["global_s"], "local_s": out["local_s"],
+            "pinned": pinned}
 
 
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("folder", help="the --keep folder of benchmarks/validation.py")
     ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--only", nargs="*", default=(), help="substrings of the case folders to run")
     args = ap.parse_args()
-    folders = sorted(str(p) for p in Path(args.folder).iterdir() if (p / "run" / "diagnosis.json").is_file())
+    folders = sorted(str(p) for p in Path(args.folder).iterdir() if (p / "run" / "modal.h5").is_file()
+                     and (not args.only or any(o in p.name for o in args.only)))
     with ProcessPoolExecutor(args.jobs) as ex:
         recs = list(ex.map(compare, folders))
     bad = 0
@@ -83,7 +111,8 @@ def main() -> int:
         bad += not ok
         print(f"{'same' if ok else 'DIFFERENT':<10} {r['case'][:70]:<70} local {','.join(r['local']) or '-':<28} "
               f"global {','.join(r['global']) or '-':<28} worst {r['worst_se']:.3g} SE  "
-              f"RMS {r['rms_local']:.3f}/{r['rms_global']:.3f} %  global {r['global_s']:.1f} s")
+              f"RMS {r['rms_local']:.3f}/{r['rms_global']:.3f} %  local {r['local_s']:.1f} s global {r['global_s']:.1f} s"
+              + (f"  (at a physical limit or undetermined in both: {', '.join(r['pinned'])})" if r["pinned"] else ""))
     print(f"# {len(recs) - bad} / {len(recs)} cases: the same effects and every parameter within 1 SE")
     return 1 if bad else 0
 

@@ -123,6 +123,11 @@ def _close(a, b, rtol):
     if isinstance(a, str) and isinstance(b, str):
         if a == b:
             return True
+        if a[:1] in "{[" and b[:1] in "{[":  # a JSON attribute: its numbers to the same tolerance
+            try:
+                return _close(json.loads(a), json.loads(b), rtol)
+            except ValueError:
+                return a == b
         try:
             return bool(np.isclose(float(a), float(b), rtol=rtol, atol=1e-12))
         except ValueError:
@@ -162,6 +167,13 @@ def test_the_digest_sees_a_changed_number(tmp_path):
     got["identify.json"][key] *= 1 + 1e-5
     assert differences(got, want) == [f"identify.json {key}: {got['identify.json'][key]} "
                                       f"!= stored {want['identify.json'][key]}"]
+
+
+def test_json_attributes_are_compared_number_by_number():
+    """A JSON attribute (modal.h5's meta) differing in the 10th digit is the same; in the 5th, not."""
+    assert _close('{"f": [1.0, "x"]}', '{"f": [1.0000000001, "x"]}', 1e-6)
+    assert not _close('{"f": [1.0, "x"]}', '{"f": [1.00001, "x"]}', 1e-6)
+    assert not _close('{"f": [1.0, "x"]}', '{"f": [1.0, "y"]}', 1e-6)
 
 
 if __name__ == "__main__":

@@ -80,9 +80,10 @@ def cavity_band_hz(R: float, opt: DiagnoseOptions) -> tuple[float, float]:
 
 
 def fit_options(opt: DiagnoseOptions, **kw) -> FitOptions:
-    # refits from the current model (a start) search locally with a short global safeguard
-    # unless the options ask for the full search every time
-    search = opt.search if kw.get("start") else "global"
+    # the base fit (from the closed-form estimate) and the refits (from the current model)
+    # search locally with a short global safeguard unless the options ask for the full
+    # search every time
+    search = opt.search
     return FitOptions(free=kw.pop("free", opt.free), seed=opt.seed, population=opt.population, weights="uncertainty",
                       generations=opt.generations, tol=opt.tol, error_floor=opt.noise_floor_pct / 100,
                       search=search, **kw)

@@ -128,6 +128,10 @@ def double_hit(force, fs: float, *, min_relative: float = 0.2, extent=None) -> n
     return out.reshape(f.shape[:-1])
 
 
+#: Most samples of a record's noise the bounce check's noise floor takes (:func:`pulse_segments`).
+NOISE_SAMPLES = 4096
+
+
 def bounce_in_pulse(force, fs: float, *, min_relative: float = 0.2, band_top: float | None = None,
                     false_alarm: float = 1e-3, min_hits: int = 5):
     """Double hits whose bounce overlaps the first pulse, by the force spectrum's notch.
@@ -172,24 +176,32 @@ def pulse_segments(force, fs: float):
     """Each record's blow: 5 ms before its peak to 20 ms after (a blow and a bounce of
     ≤ 20 ms), and the robust std of the force noise away from it.
 
+    The noise is the median absolute deviation (× 1.4826) of at most :data:`NOISE_SAMPLES`
+    samples away from the blow, evenly strided over the record: the noise samples are
+    independent, so its relative standard error is ≈ 1.17/√N = 1.8 % at N = 4,096 — ample
+    for a floor on the notch test's spread — and two medians over a 32,768-sample record
+    cost more than its FFT.
+
     Returns seg (n_records, L), noise (n_records,), ok (n_records,) — ok False for a
     non-finite or all-zero record.
     """
     f = np.asarray(force, dtype=float)
     n, ns = f.shape
-    ok = np.isfinite(f).all(axis=1) & (np.abs(np.where(np.isfinite(f), f, 0)).max(axis=1) > 0)
+    absf = np.abs(f)
+    peak = absf.max(axis=1)  # NaN when the record has one (max propagates it)
+    ok = np.isfinite(peak) & (peak > 0)
     pre, post = int(np.ceil(0.005 * fs)), int(np.ceil(0.02 * fs))
     L = pre + post
-    ipk = np.argmax(np.abs(np.where(np.isfinite(f), f, 0)), axis=1)
+    ipk = np.argmax(absf, axis=1)  # used for the ok records only
     seg = np.zeros((n, L))
     noise = np.zeros(n)
-    idx = np.arange(ns)
+    sub = np.arange(0, ns, max(1, -(-max(ns - L, 1) // NOISE_SAMPLES)))
     for i in np.flatnonzero(ok):
         lo = ipk[i] - pre
         take = np.arange(lo, lo + L)
         inside = (take >= 0) & (take < ns)
         seg[i, inside] = f[i, take[inside]]
-        away = f[i, (idx < lo) | (idx >= lo + L)]
+        away = f[i, sub[(sub < lo) | (sub >= lo + L)]]
         noise[i] = 1.4826 * np.median(np.abs(away - np.median(away))) if away.size else 0.0
     return seg, noise, ok
 

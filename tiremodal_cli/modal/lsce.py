@@ -268,19 +268,34 @@ def _poly_order(R, p: int, n_ref: int, dt: float, f_lo: float, width_hz: float) 
     except (scipy.linalg.LinAlgError, ValueError):
         W = scipy.linalg.lstsq(R[:a, :a], -R[:a, a:b], lapack_driver="gelsy")[0]
     # L (z^p I + Σ z^k W_k) = 0: eigenvalues of the block companion of A_k = W_kᵀ
-    A = [W[k * n_ref:(k + 1) * n_ref].T for k in range(p)]
+    A = np.stack([W[k * n_ref:(k + 1) * n_ref].T for k in range(p)])
     C = np.zeros((a, a), dtype=complex)
     for k in range(p):
         C[:n_ref, k * n_ref:(k + 1) * n_ref] = -A[p - 1 - k]
     if p > 1:
         C[n_ref:, :-n_ref] = np.eye(a - n_ref)
-    z, V = np.linalg.eig(C)
-    keep = np.abs(z) > 0
-    z = z[keep]
-    part = V[-n_ref:, keep].T  # the companion eigenvector's last block is the participation L
-    part = part / np.maximum(np.linalg.norm(part, axis=1, keepdims=True), np.finfo(float).tiny)
+    z = scipy.linalg.eigvals(C, overwrite_a=True, check_finite=False)
+    z = z[np.abs(z) > 0]
+    part = _participation(A, z)
     lnz = np.log(z)
     f_off = np.mod(lnz.imag / (2 * np.pi * dt), width_hz)
     s = lnz.real / dt + 1j * 2 * np.pi * (f_lo + f_off)
     fn, zeta = poles_to_modal(s)
     return OrderPoles(p, s, z, fn, zeta, part)
+
+
+def _participation(A, z):
+    """(n_poles, n_ref) unit participation factors: the null vector of the matrix polynomial
+    P(z) = z^p I + Σ_k A_k z^k at each pole (``A`` (p, n_ref, n_ref)).
+
+    The block companion's eigenvector is [z^(p-1) L; …; z L; L], so its last block L is
+    P(z)'s right null vector; taking it from a batched SVD of the n_ref × n_ref matrices
+    instead of the companion's eigenvectors halves the sweep's eigen-solution (the
+    eigenvalues alone). A root of multiplicity n_ref (a split pair) has a null space of its
+    dimension, in which any unit vector is a participation.
+    """
+    n_ref = A.shape[1]
+    P = np.broadcast_to(np.eye(n_ref, dtype=complex), (z.size, n_ref, n_ref)).copy()
+    for k in range(A.shape[0] - 1, -1, -1):  # Horner
+        P = P * z[:, None, None] + A[k]
+    return np.linalg.svd(P)[2][:, -1, :].conj()

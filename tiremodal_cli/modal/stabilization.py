@@ -140,23 +140,27 @@ def _candidates(op: OrderPoles, band: Band, zeta_max: float):
 def _statuses(op: OrderPoles, idx, shapes, prev, opt) -> list[str]:
     """Each candidate pole's status against the previous order's nearest pole: "stable"
     (frequency, damping and shape within tolerance), "fd", "fv", "f", or "new" (its
-    frequency moved, or the first order). The MAC is computed only where it decides."""
-    if not prev:
+    frequency moved, or the first order)."""
+    if not prev or not len(idx):
         return ["new"] * len(idx)
     f, z = op.freq_hz[idx], op.damping_ratio[idx]
     pf = np.array([q.freq_hz for q in prev])
     pz = np.array([q.damping_ratio for q in prev])
-    j = np.argmin(np.abs(pf[None, :] - f[:, None]), axis=1) if len(idx) else np.zeros(0, dtype=int)
+    j = np.argmin(np.abs(pf[None, :] - f[:, None]), axis=1)
     ok_f = np.abs(pf[j] - f) <= opt.tol_freq * f
     ok_d = np.abs(pz[j] - z) <= opt.tol_damping * z
-    out = []
-    for k in range(len(idx)):
-        if not ok_f[k]:
-            out.append("new")
-            continue
-        ok_v = mac(prev[j[k]].shape, shapes[k]) >= opt.tol_mac
-        out.append("stable" if ok_d[k] and ok_v else "fd" if ok_d[k] else "fv" if ok_v else "f")
-    return out
+    ok_v = _row_mac(np.array([np.ravel(prev[i].shape) for i in j]).reshape(len(idx), -1),
+                    np.reshape(shapes, (len(idx), -1))) >= opt.tol_mac
+    return ["new" if not ok_f[k] else "stable" if ok_d[k] and ok_v[k] else "fd" if ok_d[k] else "fv" if ok_v[k]
+            else "f" for k in range(len(idx))]
+
+
+def _row_mac(A, B) -> np.ndarray:
+    """:func:`mac` of each row of ``A`` with the same row of ``B`` ((k, d) each), in one
+    array call (the status of every pole of an order; ~12,000 scalar calls on the sample)."""
+    num = np.abs(np.einsum("ij,ij->i", A.conj(), B)) ** 2
+    den = np.einsum("ij,ij->i", A.conj(), A).real * np.einsum("ij,ij->i", B.conj(), B).real
+    return np.divide(num, den, out=np.zeros(len(num)), where=den > 0)
 
 
 def stabilize(band: Band, sweep_result: list[OrderPoles], opt: StabilizationOptions = StabilizationOptions()) -> Diagram:

@@ -95,6 +95,7 @@ class Evaluator:
         self.col = np.where(br == "opposite", 1, np.where(br == "cavity", 2, 0))
         self.calls = 0
         self.evaluations = 0
+        self._base_columns = {}
 
     def frequencies(self, logX) -> np.ndarray:
         logX = np.asarray(logX, dtype=float)
@@ -108,7 +109,11 @@ class Evaluator:
                 out[j] = model_frequencies(p, self.ns, self.br, eff or None, self.mem, self.f_meas)
             return out
         vals = np.exp(logX)
-        P = ParamStack.broadcast(self.base, S, **{nm: vals[i] for i, nm in self.struct})
+        cols = self._base_columns.get(S)
+        if cols is None:  # the fixed parameters' columns, built once per stack size
+            cols = self._base_columns[S] = {k: None if getattr(self.base, k) is None
+                                            else np.full(S, float(getattr(self.base, k))) for k in ParamStack.FIELDS}
+        P = ParamStack.of_arrays({**cols, **{nm: vals[i] for i, nm in self.struct}})
         eff = []
         for e, v in self.effects:
             v = dict(v)

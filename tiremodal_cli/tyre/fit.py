@@ -24,6 +24,7 @@ import numpy as np
 import scipy.optimize
 
 from tiremodal_cli.errors import DataFormatError, ParameterError
+from tiremodal_cli.tyre.closed_form import first_estimate
 from tiremodal_cli.tyre.evaluate import Evaluator, apply_parameters, jacobian, split_free
 from tiremodal_cli.tyre.fit_types import FitOptions, FitResult
 from tiremodal_cli.tyre.frequencies import model_frequencies
@@ -41,9 +42,15 @@ def fit(modes: list[MeasuredMode], base: TyreParameters = TyreParameters(), opt:
     parameters, unknown parameters or bad bounds.
     """
     names, logb, base = _checked(modes, base, opt)
+    w = _weights(modes, opt)
+    if opt.search == "local" and not opt.start:
+        # no warm start: the closed-form estimate is one (or, where it does not apply, the
+        # full search runs)
+        cf = first_estimate(modes, base, tuple(names) if not (opt.effects or opt.effect_free) else (), weights=w)
+        opt = dataclasses.replace(opt, start=cf, start_from="closed form") if cf else dataclasses.replace(opt, search="global")
     obj = Objective(Evaluator(base, opt, names, np.array([m.n for m in modes]), np.array([m.branch for m in modes]),
                               [m.member for m in modes], np.array([m.frequency_hz for m in modes])),
-                    _weights(modes, opt), progress=progress, generations=opt.generations)
+                    w, progress=progress, generations=opt.generations)
     x = _search(obj, names, logb, opt)
     obj.history.append((len(obj.history) + 1, obj.objective(x)))
     return _result(obj, x, modes, base, names, logb, opt)
@@ -119,7 +126,8 @@ def _start_vector(start: dict, names, logb, fallback) -> np.ndarray:
 def _search(obj: Objective, names, logb, opt: FitOptions) -> np.ndarray:
     """The optimum (log parameters): least squares from the start (``polish``), a local
     search safeguarded by a short global one (``local``), or differential evolution and a
-    least-squares polish (``global``, and any search without a start)."""
+    least-squares polish (``global``, and any search without a start; with a start, least
+    squares from it and from the extra starts as well, so that it contains the local search)."""
     x0 = _start_vector(opt.start, names, logb, logb.mean(axis=1)) if opt.start else None
     jac = lambda x: jacobian(obj.residuals_batch, x)  # noqa: E731
     # the Jacobian by central differences, its 2k points in one array call; the polish stops
@@ -146,7 +154,16 @@ def _search(obj: Objective, names, logb, opt: FitOptions) -> np.ndarray:
         tol=opt.tol, atol=0, polish=False, updating="deferred", vectorized=True, callback=obj.callback,
         init="latinhypercube", x0=x0)
     ls = scipy.optimize.least_squares(obj.residuals, de.x, **lsq)
-    return ls.x if obj.objective(ls.x) <= de.fun else de.x
+    x = ls.x if obj.objective(ls.x) <= de.fun else de.x
+    # the full search contains the local one: least squares from the start (and the extra
+    # starts) too, the lowest end wins — DE with the start in its population may still
+    # leave a narrow basin next to it unexplored (a Timoshenko tread's), and a reference
+    # search must never end above the local search it is the reference of
+    for start in ((x0,) + tuple(_start_vector(e, names, logb, x0) for e in opt.extra_starts)) if x0 is not None else ():
+        x1 = scipy.optimize.least_squares(obj.residuals, start, **lsq).x
+        if obj.objective(x1) < obj.objective(x):
+            x = x1
+    return x
 
 
 def _result(obj: Objective, x, modes, base: TyreParameters, names, logb, opt: FitOptions) -> FitResult:

@@ -22,6 +22,12 @@ DEFAULT_BOUNDS = {"k_r1": (1e5, 1e8), "k_r2": (1e5, 1e8), "EI": (0.1, 1e4), "rho
 PAPER_GA = {"population": 20, "generations": 300, "crossover": 0.7, "mutation": 0.1}
 
 
+#: How each ``FitOptions.search`` finds the optimum (identify.json's "search.method").
+_METHODS = {"global": "differential_evolution + least_squares",
+            "local": "least_squares from the start + differential_evolution safeguard",
+            "polish": "least_squares from the start"}
+
+
 @dataclass(frozen=True)
 class FitOptions:
     """What to fit and how.
@@ -43,9 +49,11 @@ class FitOptions:
         ``tol``); the default runs every generation, ``diagnose`` stops earlier
     start : {name: value} a known good point put into the initial population (DE's
         ``x0``; names as in ``free``/``"effect.param"``, missing ones at mid-range)
-    search : "global" (differential evolution, then least squares) or "local" (with a
-        ``start``: least squares from it, safeguarded by ``safeguard`` generations of the
-        evolutionary search; the refits of ``diagnose``) or "polish" (with a ``start``: least
+    search : "global" (differential evolution, then least squares) or "local" (least
+        squares from ``start`` — without one, from the closed-form estimate of
+        :mod:`tiremodal_cli.tyre.closed_form`, or the global search where it does not
+        apply — safeguarded by ``safeguard`` generations of the evolutionary search; the
+        base fit and the refits of ``diagnose``) or "polish" (with a ``start``: least
         squares from it alone — a refit after one mode more or less, from the optimum of
         a safeguarded search of nearly the same modes)
     """
@@ -70,6 +78,8 @@ class FitOptions:
     #: parameters, so that a candidate whose optimum lies far from the current model's (a
     #: Timoshenko tread's EI) is still found
     extra_starts: tuple = ()
+    #: where ``start`` came from ("given", or "closed form" when the fit made it)
+    start_from: str = "given"
 
 
 @dataclass(frozen=True)
@@ -116,7 +126,7 @@ class FitResult:
             "modes": self.modes,
             "not_followed": [m for m in self.modes if abs(m["error_pct"]) > max(2.0, 2 * self.rms_error_pct)],
             "history": [{"generation": g, "rms_error_pct": 100 * v} for g, v in self.history],
-            "search": {"method": "differential_evolution + least_squares", "seed": o.seed,
+            "search": {"method": _METHODS[o.search], "start": o.start_from if o.start else None, "seed": o.seed,
                        "population": o.population, "generations": o.generations,
                        "crossover": o.crossover, "mutation": o.mutation, "weights": o.weights},
         }

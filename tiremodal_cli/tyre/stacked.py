@@ -38,6 +38,14 @@ class ParamStack:
         vals.update({k: np.broadcast_to(np.asarray(v, dtype=float), (size,)) for k, v in arrays.items()})
         return cls(**vals)
 
+    @classmethod
+    def of_arrays(cls, arrays: Mapping) -> "ParamStack":
+        """A stack of the given (N,) float arrays as they are (no conversion or copy: the
+        evaluator's per-call constructor; every field of :attr:`FIELDS` must be given)."""
+        obj = cls.__new__(cls)
+        obj.__dict__.update(arrays)
+        return obj
+
     @property
     def T(self):
         return self.P0 * self.b * self.R
