@@ -8,6 +8,7 @@ from tiremodal_cli.diagnose.cavity import CavitySpec, try_cavity
 from tiremodal_cli.diagnose.options import PARAMETER_CANDIDATES, fit_options, search_start
 from tiremodal_cli.diagnose.refit import Scoring, Trial, aligned, judge, refit_on, testimony
 from tiremodal_cli.diagnose.result import Candidate, no_evidence
+from tiremodal_cli.diagnose.statistics import residual_analysis
 from tiremodal_cli.tyre.effects import get_effect
 from tiremodal_cli.tyre.fit_types import DEFAULT_BOUNDS
 from tiremodal_cli.tyre.model import NOMINAL_RIM_KG
@@ -128,6 +129,7 @@ def choose(cands, current: RobustFit, opt, n_tried, *, needed: bool):
     if not needed:
         return None, [dataclasses.replace(c, reason="not needed: the residual is at the level of the noise"
                                           + ("" if c.passes else f"; besides, {c.reason}")) for c in cands]
+    cands = [_closure(c, opt) for c in cands]
     passing = [c for c in cands if c.passes]
     best = min(passing, key=lambda c: c.delta_aicc) if passing else None
     runner = min((c for c in cands if c is not best and c.delta_aicc is not None), key=lambda c: c.delta_aicc,
@@ -142,3 +144,40 @@ def choose(cands, current: RobustFit, opt, n_tried, *, needed: bool):
         else:
             out.append(c)
     return best, out
+
+
+def own_evidence(c: Candidate) -> str | None:
+    """What a candidate explains besides the smooth residual, or None: the measured mode
+    it takes as its own (the cavity's), the split pairs it needs (a lumped mass), or a
+    mode the current model set aside that it brings back."""
+    if c.cavity_mode is not None:
+        return f"the cavity mode at {c.cavity_mode['frequency_hz']:.1f} Hz"
+    if c.kind == "coupling":
+        return "the split pairs"
+    if c.brought_back:
+        return "the set-aside mode(s) it brings back"
+    return None
+
+
+def _closure(c: Candidate, opt) -> Candidate:
+    """From the second round on, a candidate without evidence of its own must bring the
+    residual to the level of the noise.
+
+    Once the adopted model's residual still exceeds the noise, either a second effect is
+    present or the adopted effect's form differs from the tyre's; in the second case the
+    residual is systematic, not noise, and the F-test's null (independent errors of the
+    fitted variance) does not hold: any smooth parameter (a nominal value, another smooth
+    effect) buys a part of it beyond "chance". What tells a second effect from compensation
+    is what it explains besides the smooth residual (:func:`own_evidence`) or that it
+    leaves nothing but noise (the χ² test that asked for an effect in the first place)."""
+    if c.round < 2 or not c.passes or own_evidence(c) is not None or c.robust is None:
+        return c
+    after = residual_analysis(c.robust, opt)
+    if not after["exceeds_noise"]:
+        return c
+    what = (f"χ² = {after['chi2']:.1f} on {after['dof']} (p = {after['p_value']:.2g})"
+            + (f", {len(after['set_aside'])} mode(s) set aside" if after["set_aside"] else ""))
+    return dataclasses.replace(c, passes=False, reason=(
+        f"improves the fit (F-test p = {c.f_p_value:.2g}) but leaves a residual above the noise ({what}) and "
+        "explains nothing of its own (no mode brought back, no evidence of its own): on top of an adopted "
+        "effect that is compensation of a model-form error, not a second effect"))

@@ -47,10 +47,14 @@ def _modes_for_cavity(modes, cav, opt):
 
 def _cavity_evidence(current: RobustFit, extra, opt) -> list[dict]:
     """Modes that may be the cavity's: an n = 1 pattern in the cavity band that fits no
-    structural (n, branch) — or the n = 1 row kept, when the unexplained one is the structure's."""
+    structural (n, branch) — or the n = 1 row kept, when the unexplained one is the structure's.
+    A mode lsce found in a crowd (several orders alike: an alias of a high order of the
+    flat top of the same branch, read as n = 1 on N ± 1 points) shows no n = 1 pattern."""
     lo, hi = cavity_band_hz(current.fit.parameters.R, opt)
     cands = []
     for u in extra:
+        if u.get("crowd"):  # lsce: its order cannot be told — no n = 1 pattern to testify
+            continue
         n_ok = u.get("n") == 1 or (u.get("n_spatial") is not None and int(u["n_spatial"]) == 1)
         if n_ok and lo <= u["frequency_hz"] <= hi:
             cands.append({"frequency_hz": u["frequency_hz"], "displaced": None, "row": u.get("row")})

@@ -60,7 +60,8 @@ def _unexplained_rows(skipped, rows) -> list[dict]:
         row = rows[s["row"] - 1] if 0 < s.get("row", 0) <= len(rows) else {}
         out.append({"frequency_hz": float(s["frequency_hz"]), "n": s.get("n"), "branch": s.get("branch"),
                     "row": s.get("row"), "reason": reason,
-                    "significance": _num(row.get("significance")), "n_spatial": _num(row.get("n_spatial"))})
+                    "significance": _num(row.get("significance")), "n_spatial": _num(row.get("n_spatial")),
+                    "crowd": str(row.get("crowd", "")).strip().lower() in ("true", "1")})
     return out
 
 
@@ -173,32 +174,60 @@ class _Search:
 
 def _search(base: RobustFit, names, extra: tuple, n_points, opt: DiagnoseOptions, nominal: dict, ticks) -> _Search:
     """Rounds of candidates on top of the current model until the residual is at the level of
-    the noise, no candidate passes, or ``max_effects`` are adopted."""
-    current, relabelled = recheck(base, n_points, opt)
+    the noise, no candidate passes, or ``max_effects`` are adopted.
+
+    A set-aside mode is first the candidates' evidence under the order it was measured with;
+    only a mode that no adopted candidate brings back is tested as a spatial alias of
+    another order (:func:`recheck`), and when that relabels one, the round is tried again on
+    the relabelled modes. (Relabelled first, a mode that a missing effect moved — the
+    membrane's high-n same-branch modes, on a branch the base model holds flat — finds an
+    alias on the flat branch and testifies against the effect that explains it.)"""
     before = residual_analysis(base, opt, n_extra=len(extra))
-    s = _Search(current=current, residual_before=before, relabelled=list(relabelled),
-                residual_now=residual_analysis(current, opt, n_extra=len(extra)) if current is not base else before)
-    for rnd in range(1, opt.max_effects + 1):
-        pending = [n for n in names if n not in s.adopted]
-        trial = Trial(rnd=rnd, current=s.current, extra=extra, opt=opt, n_tried=len(pending), nominal=nominal)
-        round_cands = []
-        for name in pending:
-            round_cands.append(try_candidate(name, trial))
-            ticks()
-        best, judged = choose(round_cands, s.current, opt, len(pending), needed=s.residual_now["exceeds_noise"])
-        s.tried.extend(judged)
+    s = _Search(current=base, residual_before=before, residual_now=before)
+    rnd, retried = 1, False
+    while rnd <= opt.max_effects:
+        best = _round(s, rnd, names, extra, opt, nominal, ticks) if s.residual_now["exceeds_noise"] or rnd == 1 \
+            else None
         if best is None:
-            break
+            if retried or not _relabel(s, n_points, opt, extra):
+                break
+            retried = True  # the round once more, on the relabelled modes
+            continue
         s.adopted.append(best.name)
         s.current = _adopted_model(best, opt)
         if best.cavity_mode is not None:
             s.cavity_modes.append(best.cavity_mode)
-        s.current, changed = recheck(s.current, n_points, opt)
-        s.relabelled.extend(changed)
         s.residual_now = residual_analysis(s.current, opt, n_extra=len(extra) - len(s.cavity_modes))
+        _relabel(s, n_points, opt, extra)
+        rnd, retried = rnd + 1, False
         if not s.residual_now["exceeds_noise"]:
             break
     return s
+
+
+def _round(s: _Search, rnd: int, names, extra, opt, nominal, ticks):
+    """One round of candidates on top of ``s.current``; its verdicts go to ``s.tried`` (a
+    round tried again on relabelled modes replaces its earlier verdicts)."""
+    pending = [n for n in names if n not in s.adopted]
+    trial = Trial(rnd=rnd, current=s.current, extra=extra, opt=opt, n_tried=len(pending), nominal=nominal)
+    round_cands = []
+    for name in pending:
+        round_cands.append(try_candidate(name, trial))
+        ticks()
+    best, judged = choose(round_cands, s.current, opt, len(pending), needed=s.residual_now["exceeds_noise"])
+    s.tried[:] = [c for c in s.tried if c.round != rnd] + list(judged)
+    return best
+
+
+def _relabel(s: _Search, n_points, opt, extra) -> bool:
+    """Relabel the current model's set-aside modes that are spatial aliases; True when one was."""
+    current, changed = recheck(s.current, n_points, opt)
+    if not changed:
+        return False
+    s.current = current
+    s.relabelled.extend(changed)
+    s.residual_now = residual_analysis(current, opt, n_extra=len(extra) - len(s.cavity_modes))
+    return True
 
 
 def _adopted_model(best: Candidate, opt: DiagnoseOptions) -> RobustFit:
