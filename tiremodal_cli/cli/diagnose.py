@@ -9,6 +9,7 @@ import click
 from tiremodal_cli.diagnose.loop import DiagnoseOptions, diagnose, report
 from tiremodal_cli.io.files import check_overwrite, refuse_input_as_output, write_text_atomic
 from tiremodal_cli.io.modalfile import read_modal
+from tiremodal_cli.modal.spatial import grid_points
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.tyre.measured import modes_from_rows
@@ -106,4 +107,4 @@ def _rows_and_points(path: Path):
     rows = read_table_rows(path)
     if path.suffix.lower() == ".csv":
         return rows, None
-    return rows, int(read_modal(path).point_angle.size)
+    return rows, grid_points(read_modal(path).point_angle)

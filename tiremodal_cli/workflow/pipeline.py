@@ -30,6 +30,7 @@ from tiremodal_cli.io.modalfile import no_usable_modes
 from tiremodal_cli.io.modalfile import to_csv, write_modal
 from tiremodal_cli.modal.table import to_rows
 from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
+from tiremodal_cli.modal.spatial import grid_points
 from tiremodal_cli.tyre.flexible_tread import errors_by_branch, fit_flexible_tread
 from tiremodal_cli.tyre.measured import modes_from_rows
 from tiremodal_cli.tyre.model import NOMINAL_RIM_KG, TyreParameters
@@ -140,7 +141,7 @@ def _model_stages(table, params: TyreParameters, rim_how: str, opt: RunOptions, 
     ident, n_pred = _identify_report(base, measured, params, opt)
     write_text_atomic(outdir / "identify.json", json_text(ident), overwrite=True)
     say("diagnose")
-    diag = diagnose(measured, params, dopt, n_points=int(table.point_angle.size), base=base)
+    diag = diagnose(measured, params, dopt, n_points=grid_points(table.point_angle), base=base)
     rep = report(diag, n_pred)
     write_text_atomic(outdir / "diagnosis.json", json_text(rep), overwrite=True)
     write_text_atomic(outdir / "sensitivity.json", json_text(_sensitivity(diag.augmented, n_pred)), overwrite=True)
