@@ -235,6 +235,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1252 / 1334 (94 %) | 30 / 1637 (1.8 %) | 0 | 14 / 14 | 6 / 14 | |
 | 2026-11-23, end of session 6 | the layout by stage (#18: the same modes and fits, case by case); the rim mode: a measured n = 1 "same" may be the model's rim mode, and is kept in the fit below n = 0 (#15); the modal stage's orders in threads (#19) | paper | 1133 / 1212 (93 %) | 33 / 1440 (2.3 %) | 0 | 14 / 14 | 9 / 13 | 3.4 min |
 | | | ring | 1252 / 1334 (94 %) | 30 / 1637 (1.8 %) | 0 | 14 / 14 | 7 / 14 | |
+| 2026-11-23, end of session 7 | failed points keep the test's grid (#14); a spare second-round parameter refused as compensation, aliases relabelled after the candidates, the breathing mode in the fit (#15); the base fit from a closed-form start (#19) | paper | 1133 / 1212 (93 %) | 30 / 1429 (2.1 %) | 0 | 14 / 14 | 11 / 13 | 3.4 min |
+| | | ring | 1268 / 1334 (95 %) | 21 / 1630 (1.3 %) | 0 | 14 / 14 | 11 / 14 | |
 """
 
 
