@@ -62,6 +62,8 @@ def fx(tmp_path_factory):
     _csv_with(d / "zeta_text.csv", 3, "damping_ratio", "low")
     _csv_with(d / "conf_text.csv", 1, "n_confidence", "high")
     _csv_with(d / "mpc_text.csv", 1, "mpc", "x")
+    _csv_with(d / "branch_typo.csv", 2, "branch", "sideways")
+    (d / "a_file").write_text("not a folder\n")
     (d / "no_branch.csv").write_text("frequency_hz,n\n55.5,1\n66.0,2\n81.0,3\n")
     for name, value in (("p_text.h5", "high"), ("p_neg.h5", -2.0e5)):
         shutil.copy(m, d / name)
@@ -121,6 +123,13 @@ CASES = [
                                   "--overwrite"], ["--truth", "--config"]),
     ("lsce-o-is-input", ["lsce", "{f.h5}", "-o", "{f.h5}", "--overwrite"], ["--output", "input"]),
     ("lsce-csv-is-input", ["lsce", "{f.h5}", "-o", "{out}", "--csv", "{f.h5}", "--overwrite"], ["--csv", "input"]),
+    # a second output that cannot be written is refused before the first is written
+    ("lsce-csv-under-a-file", ["lsce", "{f.h5}", "-o", "{out}", "--csv", "{a_file}/x.csv"],
+     ["a_file", "is a file", "allowed"]),
+    ("frf-o-under-a-file", ["frf", "{m.h5}", "-o", "{a_file}/f.h5"], ["a_file", "is a file", "allowed"]),
+    ("run-o-under-a-file", ["run", "{m.h5}", "-o", "{a_file}/run"], ["a_file", "is a file", "allowed"]),
+    ("identify-branch-typo", ["identify", "{branch_typo.csv}"],
+     ["branch_typo.csv", "row 2", "branch", "sideways", "allowed", "same"]),
     ("mac-csv-is-input", ["mac", "{modal.h5}", "--csv", "{modal.h5}", "--overwrite"], ["--csv", "input"]),
     ("identify-csv-is-input", ["identify", "{modes.csv}", "--csv", "{modes.csv}", "--overwrite"], ["--csv", "input"]),
     ("predict-csv-is-params", ["predict", "--params", "{params_neg.toml}", "--csv", "{params_neg.toml}",

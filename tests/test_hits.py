@@ -69,7 +69,7 @@ def test_a_check_that_cannot_run_is_said(clean, caplog):
         r = compute_frf(one, FRFOptions(band_hz=(0, 320.0)))
     said = " ".join(r.meta["checks_not_run"])
     assert "consistency of the hits: needs at least 3 hits per point, the test has 1" in said
-    assert "needs at least 5 usable hits in the test, it has 4" in said
+    assert "needs at least 5 usable hits in the test (finite, non-zero force), it has 4 of 4" in said
     assert "hit check not run" in caplog.text
     r = compute_frf(clean, FRFOptions(band_hz=(0, 320.0)))
     assert r.meta["checks_not_run"] == ["consistency of the hits: needs at least 3 hits per point, the test has 2"]

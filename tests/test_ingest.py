@@ -112,3 +112,15 @@ def test_bundled_uff_sample_is_the_bundled_measurement(tmp_path):
     assert_array_equal(a.response, b.response.astype(float))
     assert_allclose(a.point_angle, b.point_angle, atol=1e-9)
     assert a.sample_rate == b.sample_rate and a.channel_name == b.channel_name
+
+
+def test_csv_non_number_names_the_files_line_and_column(tmp_path):
+    """A bad cell is named by the file's own line (1-based, the header is line 1) and the
+    column's number and name (numpy counts data rows from 0)."""
+    d = tmp_path / "csv"
+    d.mkdir()
+    (d / "point1_hit1.csv").write_text("time_s,force_N,a1\n0,1,2\n0.001,abc,3\n")
+    from tiremodal_cli.errors import DataFormatError
+
+    with pytest.raises(DataFormatError, match=r"line 3, column 2 \('force_N'\): 'abc' is not a number"):
+        read_csv_folder(d, {"a1": ("a1", "tread", 0.0)})

@@ -53,6 +53,11 @@ def test_automac_is_diagonal(modal):
     t = read_modal(modal / "m.h5")
     alias = t.n_spatial[:, None] == t.n_spatial[None, :]
     assert M[~alias].max() < 0.2
+    # the text names each mode's closest other mode (not itself) and the largest pair
+    text = run_cli(["mac", modal / "m.h5"]).stdout.splitlines()
+    off = np.where(np.eye(len(M), dtype=bool), -1, M)
+    assert f"largest off-diagonal {off.max():.3f} (" in text[0]
+    assert all("closest other" in ln for ln in text[1:]) and len(text) == len(M) + 1
 
 
 def test_analytic_and_model_mac(modal, tmp_path):

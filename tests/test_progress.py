@@ -8,6 +8,7 @@ import logging
 import pytest
 
 from tiremodal_cli.io.measurement import write_measurement
+from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS
 
 from conftest import run_cli
 
@@ -40,7 +41,8 @@ def test_run_shows_its_stages_on_a_terminal_and_nothing_with_q(meas, tmp_path, m
     assert quiet.stderr == ""
     assert quiet.stdout == res.stdout.replace(str(tmp_path / "a"), str(tmp_path / "b"))  # the data unchanged
     piped = _run(meas, tmp_path / "c", tty=False, monkeypatch=monkeypatch)
-    assert piped.stderr == ""  # a log gets no bar
+    # a log gets no bar, only what was written (stderr: for people; stdout stays the data)
+    assert "\r" not in piped.stderr and piped.stderr.splitlines() == [f"wrote {tmp_path / 'c'}/: {', '.join(OUTPUTS)}, {MANIFEST}"]
 
 
 def test_v_speaks_for_tiremodal_not_for_other_libraries(meas, tmp_path, monkeypatch, caplog):

@@ -12,7 +12,7 @@ import click
 from tiremodal_cli.workflow.batch import load_config, run_batch
 from tiremodal_cli.workflow.summary import SUMMARY_CSV, SUMMARY_JSONL
 from tiremodal_cli.cli.main import cli
-from tiremodal_cli.cli.options import FiniteRange, band_option, echo_json, json_option, parse_key_values
+from tiremodal_cli.cli.options import FiniteRange, band_option, echo_json, json_option, parse_key_values, say
 
 
 class _BatchProgress:
@@ -35,7 +35,7 @@ class _BatchProgress:
             return
         what = rec["status"] + (f": {rec['reason']}" if rec["reason"] else "")
         took = f" ({rec['seconds']:.1f} s)" if rec["status"] == "done" else ""
-        click.echo(f"batch: [{done}/{total}] {rec['test']}: {what}{took}", err=True)
+        say(f"batch: [{done}/{total}] {rec['test']}: {what}{took}")
 
     def close(self):
         if self.bar is not None:
@@ -109,7 +109,7 @@ def batch_cmd(roots, outdir, jobs, scheduler, config_file, force, band, exp_end,
             reason = (r["reason"] or "").replace('"', "'")
             click.echo(f"{r['test']},{r['status']},{r.get('modes_found') or ''},{fmt(r.get('rms_before_pct'))},"
                        f"{fmt(r.get('rms_after_pct'))},\"{reason}\"")
-    click.echo(f"batch: {len(recs)} tests: {n['done']} done, {n['skipped']} skipped (complete), {n['failed']} failed; "
-               f"summary in {outdir / SUMMARY_CSV} and {outdir / SUMMARY_JSONL}", err=True)
+    say(f"batch: {len(recs)} tests: {n['done']} done, {n['skipped']} skipped (complete), {n['failed']} failed; "
+               f"summary in {outdir / SUMMARY_CSV} and {outdir / SUMMARY_JSONL}")
     if n["failed"]:
         sys.exit(1)

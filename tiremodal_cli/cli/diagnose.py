@@ -29,7 +29,7 @@ def human(rep: dict) -> str:
     for c in rep["candidates"]:
         f = lambda v, fmt: format(v, fmt) if v is not None else "–"  # noqa: E731
         lines.append(f"{c['round']:>5} {c['name']:<18} {f(c['score'], '8.1f'):>8} {f(c['f_p_value'], '8.2g'):>8} "
-                     f"{f(c['rms_error_pct'], '7.3f'):>7}  {'ADOPTED ' if c['adopted'] else ''}{c['reason']}")
+                     f"{f(c['rms_error_pct'], '7.3f'):>7}  {c['reason']}")
     lines += ["", f"{'n':>3} {'branch':>9} {'measured':>9} {'base':>9} {'err %':>7} {'augmented':>9} {'err %':>7}"]
     for m in rep["modes"]:
         g = lambda v, fmt: format(v, fmt) if v is not None else "–"  # noqa: E731

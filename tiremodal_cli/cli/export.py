@@ -11,7 +11,7 @@ from tiremodal_cli.io.files import refuse_input_as_output
 from tiremodal_cli.io.export import DEFAULT_RADII_M, FORMATS, export_folder
 from tiremodal_cli.io.modalfile import read_modal
 from tiremodal_cli.cli.main import cli
-from tiremodal_cli.cli.options import Progress, echo_json, json_option, overwrite_option, parse_key_values
+from tiremodal_cli.cli.options import Progress, echo_json, json_option, overwrite_option, parse_key_values, say
 
 
 def _modal_path(source: Path) -> Path:
@@ -65,7 +65,7 @@ def export_cmd(source, output, fmt, radii, gif, overwrite, as_json):
     if as_json:
         echo_json(summary)
     else:
-        click.echo(f"wrote {output}/ ({', '.join(summary['files'][:3])}{' …' if len(summary['files']) > 3 else ''}): "
-                   f"{summary['modes']} modes on {summary['nodes']} nodes", err=True)
+        say(f"wrote {output}/ ({', '.join(summary['files'][:3])}{' …' if len(summary['files']) > 3 else ''}): "
+                   f"{summary['modes']} modes on {summary['nodes']} nodes")
         for item in summary["left_out"]:
-            click.echo(f"left out: {item}", err=True)
+            say(f"left out: {item}")

@@ -14,7 +14,7 @@ from tiremodal_cli.io.frffile import describe_frf, write_frf
 from tiremodal_cli.io.frfuff import write_frf_uff
 from tiremodal_cli.io.measurement import open_measurement
 from tiremodal_cli.cli.main import cli
-from tiremodal_cli.cli.options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option
+from tiremodal_cli.cli.options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option, say
 # Start-up: matplotlib (tiremodal_cli.plots) is imported inside the command, only when a figure is asked for.
 
 
@@ -92,6 +92,8 @@ def frf_cmd(measurement, output, estimator, form, band, force_window, force_wind
             r = compute_frf(m, opt, progress=bar)
         except OSError as exc:
             raise DataFormatError(f"{measurement}: cannot read the records ({exc}); the file may be truncated") from None
+        except DataFormatError as exc:  # (every hit rejected: say which test)
+            raise DataFormatError(f"{measurement}: {exc}") from None
         finally:
             bar.close()
     if not np.isfinite(r.H).any():
@@ -115,6 +117,6 @@ def frf_cmd(measurement, output, estimator, form, band, force_window, force_wind
     else:
         for x in r.rejections:
             where = "all hits" if x.hit is None else f"point {x.point + 1} hit {x.hit + 1}"
-            click.echo(f"rejected {where} ({x.channel}): {x.reason}", err=True)
-        click.echo(f"wrote {output}: {len(r.channel_name)} channels × {r.point_angle.size} points × "
-                   f"{r.freq_hz.size} lines, {len(r.rejections)} rejection(s)", err=True)
+            say(f"rejected {where} ({x.channel}): {x.reason}")
+        say(f"wrote {output}: {len(r.channel_name)} channels × {r.point_angle.size} points × "
+                   f"{r.freq_hz.size} lines, {len(r.rejections)} rejection(s)")

@@ -11,7 +11,7 @@ from tiremodal_cli.io.files import refuse_input_as_output
 from tiremodal_cli.io.ingest import read_source, source_kind
 from tiremodal_cli.io.measurement import describe, write_measurement
 from tiremodal_cli.cli.main import cli
-from tiremodal_cli.cli.options import FiniteRange, echo_json, json_option, overwrite_option
+from tiremodal_cli.cli.options import FiniteRange, echo_json, json_option, overwrite_option, say
 
 
 def _read_by_ingest(path: Path) -> bool:
@@ -57,5 +57,5 @@ def ingest_cmd(sources, output, source_kind_opt, mapping, channel_opts, pressure
     if as_json:
         echo_json(d)
     else:
-        click.echo(f"wrote {output}: {m.n_points} points × {m.n_hits} hits × {m.n_channels} channels, "
-                   f"{m.n_samples} samples at {m.sample_rate:g} Hz", err=True)
+        say(f"wrote {output}: {m.n_points} points × {m.n_hits} hits × {m.n_channels} channels, "
+                   f"{m.n_samples} samples at {m.sample_rate:g} Hz")

@@ -16,7 +16,7 @@ from tiremodal_cli.modal.table import to_rows
 from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
 from tiremodal_cli.modal.stabilization import StabilizationOptions
 from tiremodal_cli.cli.main import cli
-from tiremodal_cli.cli.options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option
+from tiremodal_cli.cli.options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option, say
 # Start-up: matplotlib (tiremodal_cli.plots) is imported inside the command, only when a figure is asked for.
 
 
@@ -26,8 +26,8 @@ def read_any_frf(path: Path, mapping=None):
         chans, points = load_channel_map(mapping) if mapping else ({}, {})
         r = read_frf_uff(path, channels=chans, points=points)
         if not np.isfinite(r.point_angle).any():
-            click.echo(f"lsce: warning: {path}: no point angles (no dataset 15 in the file, no --mapping): the modes "
-                       "are estimated as any structure's, without order n or branch", err=True)
+            say(f"lsce: warning: {path}: no point angles (no dataset 15 in the file, no --mapping): the modes "
+                       "are estimated as any structure's, without order n or branch")
         return r
     return read_frf(path)
 

@@ -103,12 +103,19 @@ def _write_csv(path, M, la, lb, overwrite):
 
 
 def _echo(kind, M, la, lb):
-    """The matrix's size and each mode's best match, for people (stdout, without --json)."""
+    """The matrix's size and each mode's best match, for people (stdout, without --json);
+    for an AutoMAC the best match among the other modes (the diagonal is 1 by definition)
+    and the pair holding the largest off-diagonal value."""
     off = M.copy()
     if kind == "auto":
-        np.fill_diagonal(off, 0)
-    click.echo(f"{kind} MAC {M.shape[0]} × {M.shape[1]}; largest off-diagonal {off.max():.3f}" if kind == "auto"
-               else f"{kind} MAC {M.shape[0]} × {M.shape[1]}")
-    for lab, row in zip(la, M):
+        np.fill_diagonal(off, -np.inf)
+        i, j = np.unravel_index(int(np.argmax(off)), off.shape) if M.shape[0] > 1 else (0, 0)
+        top = f"{off[i, j]:.3f} ({la[i]} with {lb[j]})" if M.shape[0] > 1 else "none (one mode)"
+        click.echo(f"{kind} MAC {M.shape[0]} × {M.shape[1]}; largest off-diagonal {top}")
+    else:
+        click.echo(f"{kind} MAC {M.shape[0]} × {M.shape[1]}")
+    if kind == "auto" and M.shape[0] < 2:
+        return
+    for lab, row in zip(la, off if kind == "auto" else M):
         j = int(np.argmax(row))
-        click.echo(f"{lab:>28}  best {lb[j]} ({row[j]:.3f})")
+        click.echo(f"{lab:>28}  {'closest other' if kind == 'auto' else 'best'} {lb[j]} ({row[j]:.3f})")

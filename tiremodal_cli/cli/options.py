@@ -40,6 +40,12 @@ def quiet() -> bool:
     return bool(ctx is not None and (ctx.find_root().obj or {}).get("quiet"))
 
 
+def say(text: str) -> None:
+    """A message for the person (stderr), not data: nothing with ``tiremodal -q``."""
+    if not quiet():
+        click.echo(text, err=True)
+
+
 def show_progress() -> bool:
     """Bars and stage messages only for a person: stderr a terminal, and no ``-q``."""
     return _tty() and not quiet()

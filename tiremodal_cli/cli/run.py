@@ -13,7 +13,7 @@ from tiremodal_cli.tyre.model import NOMINAL_RIM_KG
 from tiremodal_cli.workflow.run_folder import run_folder
 from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions
 from tiremodal_cli.cli.main import cli
-from tiremodal_cli.cli.options import FiniteRange, StageProgress, band_option, echo_json, json_option, load_params, params_options
+from tiremodal_cli.cli.options import FiniteRange, StageProgress, band_option, echo_json, json_option, load_params, params_options, say
 
 
 @cli.command("run", epilog="\b\nExample:\n  tiremodal run sample_data/gl073a_sim.h5 -o out/gl073a --overwrite")
@@ -42,10 +42,10 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
     from another system): such a test starts at lsce, in SI from the file's units, its
     points placed by the file's geometry (dataset 15) or by --mapping.
 
-    Writes frf.h5, modal.h5, modes.csv, identify.json, diagnosis.json and, last, run.json
-    (checksums and summary) into a private folder beside OUTDIR, installed whole when
-    complete: OUTDIR is always the old complete run, absent, or the new one. Prints the
-    summary (JSON with --json).
+    Writes frf.h5, modal.h5, modes.csv, identify.json, diagnosis.json, sensitivity.json and,
+    last, run.json (checksums and summary) into a private folder beside OUTDIR, installed
+    whole when complete: OUTDIR is always the old complete run, absent, or the new one.
+    Prints the summary on stdout (JSON with --json); what it wrote on stderr.
     """
     existing = [n for n in (*OUTPUTS, MANIFEST) if (outdir / n).exists()]
     if existing and not overwrite:  # checked again under the lock; here to refuse before any work
@@ -74,9 +74,12 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
                    f"to SI, from {src['from']}; points from {src['geometry']}); started at lsce: "
                    f"{summary['modes_found']} modes")
     else:
+        rej = summary["rejected_hits"]  # (a channel without signal is listed with hit None: not a hit)
+        dead = sorted({x["channel"] for x in rej if x["hit"] is None})
         click.echo(f"{summary['measurement']}: {summary['modes_found']} modes, "
-                   f"{len(summary['rejected_hits'])} rejected hit(s)")
+                   f"{sum(x['hit'] is not None for x in rej)} rejected hit(s)"
+                   + (f", no signal on {', '.join(dead)}" if dead else ""))
     click.echo("identified: " + ", ".join(f"{k} = {v['value']:.5g} ± {v['std_error']:.2g}"
                                           for k, v in summary["identified"].items()))
     click.echo(f"diagnosis: {summary['verdict']}")
-    click.echo(f"wrote {outdir}/: {', '.join(OUTPUTS)}, {MANIFEST}")
+    say(f"wrote {outdir}/: {', '.join(OUTPUTS)}, {MANIFEST}")

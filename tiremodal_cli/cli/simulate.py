@@ -21,7 +21,7 @@ from tiremodal_cli.tyre.ring import elements_for
 from tiremodal_cli.tyre.ring_parameters import RING_VARIANTS, RingParameters
 from tiremodal_cli.tyre.simulate import MODELS, Channel, Faults, SimulationConfig, simulate
 from tiremodal_cli.cli.main import cli
-from tiremodal_cli.cli.options import FiniteRange, Progress, dumps, echo_json, json_option, overwrite_option, parse_key_values
+from tiremodal_cli.cli.options import FiniteRange, Progress, dumps, echo_json, json_option, overwrite_option, parse_key_values, say
 
 _TABLES = {"params", "effects", "faults", "channels", "ring"}
 _SCALARS = {f.name for f in dataclasses.fields(SimulationConfig)} - _TABLES - {"model"} | {"model", "variant"}
@@ -239,5 +239,5 @@ def simulate_cmd(output, config_file, model, variant, truth, seed, n_points, n_h
     if as_json:
         echo_json(summary)
     else:
-        click.echo(f"wrote {output} ({summary['n_points']} points × {summary['n_hits']} hits × "
-                   f"{summary['n_channels']} channels) and {truth}", err=True)
+        say(f"wrote {output} ({summary['n_points']} points × {summary['n_hits']} hits × "
+                   f"{summary['n_channels']} channels) and {truth}")

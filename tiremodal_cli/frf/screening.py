@@ -135,8 +135,8 @@ def test_wide_checks(m, fs, opt):
     seg, noise, ok = (np.concatenate([p[k] for p in parts]) for k in range(3))
     flags, notch, ran = bounce_from_segments(seg, noise, ok, fs, min_relative=opt.double_hit_relative)
     if not ran:
-        not_run.append(f"double hits within the pulse (force spectrum): needs at least 5 usable hits in the test, "
-                       f"it has {n_p * n_h}")
+        not_run.append(f"double hits within the pulse (force spectrum): needs at least 5 usable hits in the test "
+                       f"(finite, non-zero force), it has {int(ok.sum())} of {n_p * n_h}")
     for k in np.flatnonzero(flags):
         out.setdefault(int(k) // n_h, []).append((int(k) % n_h, float(notch[k])))
     if n_h < 3:

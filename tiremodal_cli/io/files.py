@@ -27,7 +27,7 @@ def _umask() -> int:
 #: the process's file-creation mask, read once (reading it means setting it: not thread-safe)
 UMASK = _umask()
 
-__all__ = ["atomic_path", "check_overwrite", "dumps", "install_dir", "sha256_file", "write_text_atomic",
+__all__ = ["atomic_path", "check_overwrite", "check_writable", "dumps", "install_dir", "sha256_file", "write_text_atomic",
            "refuse_input_as_output", "path_lock", "check_size", "UMASK"]
 
 
@@ -133,11 +133,34 @@ def check_size(nbytes: float, what: str, limit: int | None = None) -> None:
 
 
 def check_overwrite(path: str | os.PathLike, overwrite: bool) -> Path:
-    """Refuse an existing output unless ``overwrite`` is true; return the path."""
+    """Refuse an existing output unless ``overwrite`` is true, and an output that cannot be
+    written (:func:`check_writable`); return the path. Commands call it for every output
+    before any work, so that a bad second output never leaves the first one written."""
     path = Path(path)
     if path.exists() and not overwrite:
         raise OutputExistsError(f"output {str(path)!r} exists; pass --overwrite to replace it")
+    check_writable(path)
     return path
+
+
+def check_writable(path: str | os.PathLike) -> None:
+    """Refuse an output whose folder cannot be made or written: the nearest existing
+    ancestor must be a folder in which a file can be created (probed with a temporary file,
+    removed at once: permissions alone do not tell, e.g. for root or a read-only mount)."""
+    path = Path(path).absolute()
+    folder = path.parent
+    while not folder.exists():
+        folder = folder.parent
+    if not folder.is_dir():
+        raise ParameterError(f"output {str(path)!r}: {str(folder)!r} is a file, not a folder; "
+                             "allowed: a path in a folder (existing or new)")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".tiremodal-probe.", dir=folder)
+    except OSError as exc:
+        raise ParameterError(f"output {str(path)!r}: cannot write in {str(folder)!r} ({exc.strerror}); "
+                             "allowed: a folder you can write") from None
+    os.close(fd)
+    os.unlink(probe)
 
 
 @contextlib.contextmanager

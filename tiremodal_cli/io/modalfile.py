@@ -35,6 +35,7 @@ import h5py
 import numpy as np
 
 from tiremodal_cli import __version__
+from tiremodal_cli.conventions import BRANCHES
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import atomic_path
 from tiremodal_cli.io.measurement import attr_str, open_hdf5, read_strings
@@ -233,6 +234,11 @@ def read_modal_csv(path) -> list[dict]:
             v = r.get(key)
             if isinstance(v, str) and v.strip() != "":
                 _check_csv_cell(path, i + 1, key, v.strip())
+        b = r.get("branch")
+        if isinstance(b, str) and b.strip() != "" and b.strip().lower() not in BRANCHES:
+            # (a typo would leave the row out of every fit, silently)
+            raise DataFormatError(f"{path}: row {i + 1}: branch={b!r} is not allowed; allowed: "
+                                  f"{', '.join(BRANCHES)} or empty (unknown)")
     return rows
 
 

@@ -49,7 +49,7 @@ from tiremodal_cli.io.ingest.uff import uff_files
 from tiremodal_cli.io.measurement import write_measurement
 from tiremodal_cli.tyre.model import NOMINAL_RIM_KG, TyreParameters
 from tiremodal_cli.workflow.discovery import BatchTest, discover, source_sha256
-from tiremodal_cli.workflow.executors import SerialExecutor, executor
+from tiremodal_cli.workflow.executors import SerialExecutor, dask_client_class, executor
 from tiremodal_cli.workflow.manifest import is_complete, read_manifest
 from tiremodal_cli.workflow.pipeline import run
 from tiremodal_cli.workflow.run_options import RunOptions
@@ -307,6 +307,7 @@ def run_batch(roots: Sequence, outdir, config: BatchConfig = BatchConfig(), *, j
     """
     outdir = Path(outdir)
     if scheduler:  # a remote worker's working folder is not ours: every path it sees is absolute
+        dask_client_class()  # (the optional extra is there: said before any work)
         roots, outdir = [Path(os.path.abspath(r)) for r in roots], Path(os.path.abspath(outdir))
     if outdir.exists() and not outdir.is_dir():
         raise ParameterError(f"{outdir}: exists and is not a folder")

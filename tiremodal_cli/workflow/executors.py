@@ -15,7 +15,7 @@ from collections.abc import Iterator
 
 from tiremodal_cli.errors import ParameterError
 
-__all__ = ["SerialExecutor", "executor"]
+__all__ = ["SerialExecutor", "dask_client_class", "executor"]
 
 
 class SerialExecutor(cf.Executor):
@@ -112,13 +112,20 @@ def executor(jobs: int = 1, scheduler: str | None = None, *, workers_lock=None) 
         pool.shutdown(wait=True)
 
 
-@contextlib.contextmanager
-def _dask_executor(scheduler: str) -> Iterator[cf.Executor]:
-    """The executor of a Dask cluster's workers (``distributed.Client.get_executor()``)."""
+def dask_client_class():
+    """``distributed.Client``, or a clear error when the optional [dask] extra is missing
+    (``batch`` asks before any work)."""
     try:
         from distributed import Client  # here, not at the top: an optional dependency (the [dask] extra)
     except ImportError:
         raise ParameterError("--scheduler needs dask.distributed: pip install 'tiremodal[dask]'") from None
+    return Client
+
+
+@contextlib.contextmanager
+def _dask_executor(scheduler: str) -> Iterator[cf.Executor]:
+    """The executor of a Dask cluster's workers (``distributed.Client.get_executor()``)."""
+    Client = dask_client_class()
     try:
         client = Client(scheduler, timeout="10s")
     except (OSError, TimeoutError) as exc:

@@ -234,6 +234,8 @@ def _frf_stage(measurement: Path, opt: RunOptions):
             r = compute_frf(m, FRFOptions(band_hz=(0.0, opt.frf_top * fs), exp_end=opt.exp_end, form=opt.form))
         except OSError as exc:
             raise DataFormatError(f"{measurement}: cannot read the records ({exc}); the file may be truncated") from None
+        except DataFormatError as exc:  # (every hit rejected: say which test)
+            raise DataFormatError(f"{measurement}: {exc}") from None
         force_g = _force_autospectrum(m, r.freq_hz)
         meta = {"tire": getattr(m, "tire", None), "inflation_pressure": getattr(m, "inflation_pressure", None),
                 "n_points": int(m.n_points), "n_hits": int(m.n_hits), "sample_rate": fs}

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from tiremodal_cli.errors import OutputExistsError
 from tiremodal_cli.errors import DataFormatError, ParameterError
-from tiremodal_cli.io.files import UMASK, install_dir, path_lock, refuse_input_as_output, sha256_file
+from tiremodal_cli.io.files import UMASK, check_writable, install_dir, path_lock, refuse_input_as_output, sha256_file
 from tiremodal_cli.io.frfuff import is_uff
 from tiremodal_cli.tyre.model import TyreParameters
 from tiremodal_cli.workflow.pipeline import run
@@ -60,8 +60,6 @@ def run_folder(measurement, outdir, opt: RunOptions = RunOptions(), *, params: T
     OutputExistsError : outputs exist in ``outdir`` and ``overwrite`` is false
     ParameterError : ``outdir`` is the measurement, or is a file, or another run holds its lock
     """
-
-
     measurement, outdir = Path(measurement), Path(outdir)
     refuse_input_as_output({"--output": outdir}, {"measurement": measurement,
                                                   **({"--mapping": Path(mapping)} if mapping else {})})
@@ -70,6 +68,7 @@ def run_folder(measurement, outdir, opt: RunOptions = RunOptions(), *, params: T
     if not measurement.is_file():
         raise DataFormatError(f"{measurement}: no such file")
     parent = outdir.parent
+    check_writable(outdir)  # (a folder under a file, or one that cannot be written: exit 2, one line)
     parent.mkdir(parents=True, exist_ok=True)
     with path_lock(parent / f".{outdir.name}.lock", f"--output {str(outdir)!r}"):
         existing = [n for n in (*OUTPUTS, MANIFEST) if (outdir / n).exists()]

@@ -42,7 +42,15 @@ def _table(path: Path):
     try:
         data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     except ValueError as exc:
-        raise DataFormatError(f"{path}: non-numeric value ({exc})") from None
+        # numpy counts the data rows from 0 after the header and the columns from 1: say the
+        # file's own line (1-based, the header is line 1) and the column's name
+        m = re.search(r"string '(.*)' to \S+ at row (\d+), column (\d+)", str(exc))
+        if m is None:
+            raise DataFormatError(f"{path}: non-numeric value ({exc}); allowed: numbers") from None
+        col = int(m.group(3))
+        name = f" ({header[col - 1]!r})" if 0 < col <= len(header) else ""
+        raise DataFormatError(f"{path}: line {int(m.group(2)) + 2}, column {col}{name}: {m.group(1)!r} is not a "
+                              "number; allowed: numbers") from None
     if data.shape[1] != len(header):
         raise DataFormatError(f"{path}: {data.shape[1]} columns of data, {len(header)} in the header")
     return header, data
