@@ -119,7 +119,7 @@ def read_frf(path) -> FRFResult:
         Not an FRF file, an unknown version, a missing dataset or sizes that do not match.
     """
     where = str(path)
-    with open_hdf5(path) as h:
+    with open_hdf5(path, "an FRF file (HDF5, written by tiremodal frf; or UFF 58 FRFs named *.uff or *.unv)") as h:
         fmt = attr_str(h.attrs, "format")
         if fmt != FORMAT_NAME:
             raise DataFormatError(f"{where}: format={fmt!r} is not an FRF file; expected {FORMAT_NAME!r}")
@@ -167,7 +167,7 @@ def _s(v):
 def describe_frf(path: str | os.PathLike) -> dict:
     """What an FRF file holds (``tiremodal info``): form and units, sizes, band, channels, provenance."""
     r = read_frf(path)
-    with open_hdf5(path) as h:
+    with open_hdf5(path, "an FRF file (HDF5, written by tiremodal frf; or UFF 58 FRFs named *.uff or *.unv)") as h:
         src = {k: _s(h.attrs[k]) for k in ("input_file", "input_sha256", "tiremodal_version") if k in h.attrs}
     return {"format": FORMAT_NAME, "format_version": FORMAT_VERSION, "estimator": r.estimator, "form": r.form,
             "units": UNITS[r.form], "n_channels": len(r.channel_name), "n_points": int(r.point_angle.size),

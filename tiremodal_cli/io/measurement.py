@@ -149,15 +149,17 @@ def check_finite(m: Measurement, where: str = "measurement") -> None:
             _fail(where, f"dataset {name!r} holds non-finite samples (first at index {idx})")
 
 
-def open_hdf5(path: str | os.PathLike) -> h5py.File:
-    """Open an HDF5 file read-only, turning every failure into one DataFormatError line."""
+def open_hdf5(path: str | os.PathLike, what: str = "a measurement file (HDF5, docs/format.md)") -> h5py.File:
+    """Open an HDF5 file read-only, turning every failure into one DataFormatError line
+    that says what the file should be (``what``)."""
     path = Path(path)
     if not path.is_file():
         raise DataFormatError(f"{path}: no such file")
     try:
         return h5py.File(path, "r")
     except OSError:
-        raise DataFormatError(f"{path}: not a readable HDF5 file (truncated, or another format)") from None
+        raise DataFormatError(f"{path}: not a readable HDF5 file (truncated, or another format); "
+                              f"allowed: {what}") from None
 
 
 def read_strings(ds) -> tuple[str, ...]:

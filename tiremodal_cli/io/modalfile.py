@@ -144,7 +144,7 @@ def read_modal(path) -> ModalTable:
         Not a modal file, an unknown version, a missing dataset or sizes that do not match.
     """
     where = str(path)
-    with open_hdf5(path) as h:
+    with open_hdf5(path, "a modal file (HDF5, written by tiremodal lsce)") as h:
         fmt = attr_str(h.attrs, "format")
         if fmt != FORMAT_NAME:
             raise DataFormatError(f"{where}: format={fmt!r} is not a modal file; expected {FORMAT_NAME!r}")
