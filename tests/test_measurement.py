@@ -87,7 +87,8 @@ def test_truncated_and_foreign_files(tmp_path):
         before = digest(f)
         res = run_cli(["info", f])
         assert res.exit_code == 2
-        assert res.stderr.strip().splitlines() == [f"Error: {f}: not a readable HDF5 file (truncated, or another format)"]
+        (line,) = res.stderr.strip().splitlines()
+            assert line.startswith(f"Error: {f}: not a readable HDF5 file (truncated, or another format); allowed: ")
         assert digest(f) == before
     res = run_cli(["info", tmp_path / "absent.h5"])
     assert res.exit_code == 2 and "no such file" in res.stderr
