@@ -88,7 +88,7 @@ def test_truncated_and_foreign_files(tmp_path):
         res = run_cli(["info", f])
         assert res.exit_code == 2
         (line,) = res.stderr.strip().splitlines()
-            assert line.startswith(f"Error: {f}: not a readable HDF5 file (truncated, or another format); allowed: ")
+        assert line.startswith(f"Error: {f}: not a readable HDF5 file (truncated, or another format); allowed: ")
         assert digest(f) == before
     res = run_cli(["info", tmp_path / "absent.h5"])
     assert res.exit_code == 2 and "no such file" in res.stderr
