@@ -282,3 +282,19 @@ def test_points_on_a_rounded_uniform_grid_are_put_on_it_and_hand_marked_ones_are
     rng = np.random.default_rng(3)
     marked = {k + 1: (float(t + rng.normal(0, 1e-3 / R)), R) for k, t in enumerate(th)}
     assert _uniform_grid(marked, list(range(1, N + 1))) == marked
+
+
+def test_our_own_uff_export_is_read_back_without_a_mapping(tmp_path, exact_sim):
+    """``frf --uff`` writes dataset 15 with the points and sensors at their angles: the
+    file reads back (as run and lsce read it) with the test's point angles, and the
+    channels' locations from their names."""
+    from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
+    from tiremodal_cli.io.frfuff import write_frf_uff
+    from tiremodal_cli.workflow.pipeline import read_uff_test
+
+    r = compute_frf(exact_sim.measurement, FRFOptions(band_hz=(0.0, 300.0)))
+    back, _ = read_uff_test([write_frf_uff(tmp_path / "own.uff", r)])
+    d = np.angle(np.exp(1j * (back.point_angle - r.point_angle)))
+    assert np.max(np.abs(d)) < 1e-5  # dataset 15 holds six significant digits
+    assert back.channel_location == r.channel_location
+    assert np.allclose(back.H, r.H, rtol=1e-4, atol=1e-6 * np.abs(r.H).max())

@@ -52,6 +52,8 @@ def write_frf_uff(path, r: FRFResult, *, point_node0: int = 101, test_name: str 
     direction +Z (3) for both. ID lines: 1 what (tiremodal version, estimator, form),
     2 which (channel / point), 3 the date written, 4 the test (``test_name``), 5 the
     number of averages. A dead channel is left out, with a warning naming it (logged).
+    Dataset 15 places the points and sensors at their angles (a unit circle: the FRFs do
+    not know the radius), so the file is read back without a mapping.
 
     Parameters
     ----------
@@ -69,7 +71,7 @@ def write_frf_uff(path, r: FRFResult, *, point_node0: int = 101, test_name: str 
     """
     import pyuff  # (imported when used: 20 ms of every start-up otherwise)
     date = datetime.datetime.now().strftime("%d-%b-%y %H:%M:%S")
-    sets = []
+    sets = _geometry_sets(r, point_node0)
     for ic, name in enumerate(r.channel_name):
         if name in r.dead_channels:
             log.warning("channel %r left out of the UFF export %s: it is dead (its records hold only noise)",
@@ -81,6 +83,21 @@ def write_frf_uff(path, r: FRFResult, *, point_node0: int = 101, test_name: str 
         tmp.unlink()
         pyuff.UFF(str(tmp)).write_sets(sets, mode="add")
     return Path(path)
+
+
+def _geometry_sets(r: FRFResult, node0: int) -> list:
+    """Dataset 15 placing the impact points (nodes ``node0 + point_index``) and the sensors
+    (nodes ``1 … n_channels``) at their angles on a unit circle in the XY plane, so that the
+    file is read back (``run``, ``lsce``) without a mapping; the radius is not recorded (the
+    FRFs do not know it): only the angles mean anything. None when an angle is unknown."""
+    import pyuff  # (imported when used: 20 ms of every start-up otherwise)
+    ang = np.concatenate([np.asarray(r.channel_angle, float), np.asarray(r.point_angle, float)])
+    if not np.all(np.isfinite(ang)):
+        return []
+    nodes = list(range(1, len(r.channel_name) + 1)) + [node0 + int(i) for i in r.point_index]
+    return [pyuff.prepare_15(node_nums=nodes, def_cs=[0] * len(nodes), disp_cs=[0] * len(nodes),
+                             color=[1] * len(nodes), x=np.cos(ang).tolist(), y=np.sin(ang).tolist(),
+                             z=[0.0] * len(nodes))]
 
 
 def _frf_and_coherence_sets(r: FRFResult, ic: int, ip: int, *, node0: int, date: str, test_name: str) -> list:

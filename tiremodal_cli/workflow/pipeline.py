@@ -256,8 +256,6 @@ def read_uff_test(paths, mapping=None):
     -------
     r : FRFResult ; meta : dict (``starts_at`` = "lsce", ``frf_source``: units, factor, geometry)
     """
-
-
     chans, points = load_channel_map(mapping) if mapping else ({}, {})
     test = dict(load_mapping(mapping).get("test", {})) if mapping else {}
     r = read_frf_uff(paths, channels=chans, points=points, require_geometry=True)
