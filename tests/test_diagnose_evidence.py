@@ -101,3 +101,20 @@ def test_a_rim_mass_the_modes_cannot_see_is_undetermined():
     assert {"m_w", "rim_fixture.k_f"} <= set(only.augmented.undetermined)
     assert abs(prof["ridge"]["f_w_hz"] / f_rim - 1) < 1e-3
     assert "not unique" in only.verdict and only.to_dict()["rim_mass_profile"]["determined"] is False
+
+
+def test_the_cavity_gets_a_round_of_its_own_past_max_effects():
+    """A membrane (T_s = 2e4 N) and an air cavity (f_c = 125 Hz, γ = 0.3) on the paper's
+    tyre, the cavity mode read as n = 33 on 34 points: with ``max_effects`` = 1 the membrane
+    is adopted first, and the cavity mode — which no structural effect can explain — still
+    earns the air cavity a round, in which it is adopted."""
+    p = TyreParameters()
+    eff = {"sidewall_membrane": {"T_s": 2.0e4}, "air_cavity": {"f_cavity_hz": 125.0, "gamma": 0.3}}
+    rows = _rows(p, eff)
+    f_cav = float(model_frequencies(p, [1], ["cavity"], eff)[0])
+    rows.append({"frequency_hz": f_cav, "n": 33, "branch": "same", "n_spatial": 1, "in_order": False})
+    opt = DiagnoseOptions(candidates=("sidewall_membrane", "air_cavity"), max_effects=1)
+    d = diagnose(rows, p, opt)
+    assert d.adopted == ("sidewall_membrane", "air_cavity")
+    assert [c.name for c in d.candidates if c.round == 2] == ["air_cavity"]
+    assert abs(d.cavity_modes[0]["frequency_hz"] / f_cav - 1) < 1e-9
