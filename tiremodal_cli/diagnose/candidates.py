@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
+import scipy.special
+
 from tiremodal_cli.diagnose.cavity import CavitySpec, try_cavity
 from tiremodal_cli.diagnose.options import PARAMETER_CANDIDATES, fit_options, search_start
 from tiremodal_cli.diagnose.refit import Scoring, Trial, aligned, judge, refit_on, testimony
@@ -14,7 +17,7 @@ from tiremodal_cli.tyre.fit_types import DEFAULT_BOUNDS
 from tiremodal_cli.tyre.model import NOMINAL_RIM_KG
 from tiremodal_cli.tyre.robust import RobustFit, robust_fit
 
-__all__ = ["try_candidate", "adopt_reason", "choose"]
+__all__ = ["try_candidate", "adopt_reason", "choose", "split_evidence"]
 
 
 def _effect_spec(name, fixed_effects):
@@ -84,7 +87,43 @@ def _try_effect(name: str, trial: Trial) -> Candidate:
     fo = fit_options(trial.opt, free=struct_free, effects=effects, effect_free=efree,
                      start={**search_start(cur), **own},
                      extra_starts=({**search_start(cur), **(nominal or {}), **own},) if nominal else ())
-    return _judged(name, common, trial, cur.parameters, fo, Scoring(pnames, bounds, trial.opt, trial.n_tried))
+    c = _judged(name, common, trial, cur.parameters, fo, Scoring(pnames, bounds, trial.opt, trial.n_tried))
+    if eff.kind == "coupling" and c.passes:
+        missing = split_evidence(c, trial.opt)[1]
+        if missing:
+            return dataclasses.replace(c, passes=False, reason=missing)
+    return c
+
+
+def split_evidence(c: Candidate, opt) -> tuple[list[dict], str | None]:
+    """Does a coupling candidate's fit reproduce the split pairs that are its evidence?
+
+    Per measured pair (both members in the candidate's fit): the splitting Δ = f_upper −
+    f_lower with σ_Δ = √(σ_lower² + σ_upper²) (the members' frequency uncertainties); the
+    pair is a split beyond its measurement uncertainty when Δ > z σ_Δ, and the fit explains
+    it when |Δ − Δ_model| ≤ z σ_Δ, z = Φ⁻¹(1 − α/2). Every other candidate is axisymmetric
+    (Δ_model = 0), so a split the coupling's fit does not reproduce testifies for nothing:
+    a pair of two orders read as one, a crowd's poles. Returns (the pairs, each with Δ,
+    σ_Δ, Δ_model, "real", "explained"; None when at least one real split is explained, else
+    why not)."""
+    z = float(scipy.special.ndtri(1 - opt.alpha / 2))
+    sig = {(m.n, m.branch, m.member): m.uncertainty_hz for m in (c.robust.kept if c.robust else ()) if m.member}
+    rows = {(r["n"], r["branch"], r.get("member")): r for r in (c.fit.modes if c.fit else ())}
+    pairs = []
+    for (n, b, mem), s_lo in sig.items():
+        if mem != "lower" or (n, b, "upper") not in sig or (n, b, "lower") not in rows or (n, b, "upper") not in rows:
+            continue
+        lo, up = rows[(n, b, "lower")], rows[(n, b, "upper")]
+        d, dm = up["measured_hz"] - lo["measured_hz"], up["model_hz"] - lo["model_hz"]
+        s_d = float(np.hypot(s_lo, sig[(n, b, "upper")]))
+        pairs.append({"n": n, "branch": b, "splitting_hz": d, "sigma_hz": s_d, "model_splitting_hz": dm,
+                      "real": d > z * s_d, "explained": abs(d - dm) <= z * s_d})
+    if any(p["real"] and p["explained"] for p in pairs):
+        return pairs, None
+    what = "; ".join(f"n = {p['n']} {p['branch']}: measured {p['splitting_hz']:.2f} ± {p['sigma_hz']:.2f} Hz, "
+                     f"model {p['model_splitting_hz']:.2f} Hz" for p in pairs) or "no pair kept in its fit"
+    return pairs, ("no evidence: its fit reproduces no measured split pair beyond the splitting's "
+                   f"uncertainty (z = {z:.2f}; {what})")
 
 
 def _judged(name, common, trial: Trial, p0, fo, scoring: Scoring) -> Candidate:

@@ -14,7 +14,7 @@ from tiremodal_cli.tyre.frequencies import model_frequencies
 from tiremodal_cli.tyre.measured import MeasuredMode
 from tiremodal_cli.tyre.robust import RobustFit, robust_fit
 
-__all__ = ["CavitySpec", "try_cavity"]
+__all__ = ["CavitySpec", "try_cavity", "band_modes", "unexplained_band_modes"]
 
 
 @dataclass(frozen=True)
@@ -52,16 +52,56 @@ def _cavity_evidence(current: RobustFit, extra, opt) -> list[dict]:
     flat top of the same branch, read as n = 1 on N ± 1 points) shows no n = 1 pattern."""
     lo, hi = cavity_band_hz(current.fit.parameters.R, opt)
     cands = []
+    for u in band_modes(extra, lo, hi, current):
+        cands.append({"frequency_hz": u["frequency_hz"], "displaced": None, "row": u.get("row")})
+        for m in current.modes:
+            if m.n == 1 and m.branch == u.get("branch") and lo <= m.frequency_hz <= hi:
+                cands.append({"frequency_hz": m.frequency_hz, "displaced": u["frequency_hz"], "row": None})
+    return cands
+
+
+def band_modes(extra, lo: float, hi: float, current: RobustFit) -> list[dict]:
+    """The rows that fit no structural (n, branch), show an n = 1 pattern (their order, or
+    the order read on the points, is 1) and lie in the cavity band [lo, hi] Hz — not in a
+    crowd (lsce: its order cannot be told, no n = 1 pattern to testify), and not a row
+    labelled n = 1 of a branch whose structural n = 1 no other row holds: that row may be
+    the structural mode itself, out of its branch's dispersion order (the ring's n = 1
+    opposite lies above n = 3 with a free rim and with a tangential belt), and a model that
+    misplaces it has a structural error, not a cavity."""
+    held = {m.branch for m in current.modes if m.n == 1}
+    out = []
     for u in extra:
-        if u.get("crowd"):  # lsce: its order cannot be told — no n = 1 pattern to testify
+        if u.get("crowd") or (u.get("n") == 1 and u.get("branch") not in held):
             continue
         n_ok = u.get("n") == 1 or (u.get("n_spatial") is not None and int(u["n_spatial"]) == 1)
         if n_ok and lo <= u["frequency_hz"] <= hi:
-            cands.append({"frequency_hz": u["frequency_hz"], "displaced": None, "row": u.get("row")})
-            for m in current.modes:
-                if m.n == 1 and m.branch == u.get("branch") and lo <= m.frequency_hz <= hi:
-                    cands.append({"frequency_hz": m.frequency_hz, "displaced": u["frequency_hz"], "row": None})
-    return cands
+            out.append(u)
+    return out
+
+
+def unexplained_band_modes(current: RobustFit, extra, opt, explained=()) -> list[dict]:
+    """The cavity band's n = 1 modes that fit no structural (n, branch) (:func:`band_modes`),
+    each with its normalised distance from the current model's nearest n = 1 mode:
+    ``z`` = |f_model / f − 1| / floor. They are measured modes the model must explain
+    like any other: a model without a mode there leaves them at that distance (the
+    residual χ² counts them). ``explained``: frequencies (Hz) an adopted cavity took."""
+    par = current.fit.parameters
+    lo, hi = cavity_band_hz(par.R, opt)
+    done = {round(float(f), 6) for f in explained}
+    effects = current.fit.effects or None
+    branches = ["same", "opposite"] + (["cavity"] if effects and "air_cavity" in effects else [])
+    out = []
+    for u in band_modes(extra, lo, hi, current):
+        f = float(u["frequency_hz"])
+        if round(f, 6) in done:
+            continue
+        near = model_frequencies(par, [1] * len(branches), branches, effects, meas_hz=[f] * len(branches))
+        near = near[np.isfinite(near)]
+        m = float(near[np.argmin(np.abs(near / f - 1))]) if near.size else float("nan")
+        d = abs(m / f - 1) if near.size else np.inf
+        out.append({"frequency_hz": f, "n": u.get("n"), "branch": u.get("branch"), "model_hz": m,
+                    "z": float(d / (opt.noise_floor_pct / 100))})
+    return out
 
 
 def _ordered_union(first, *others):

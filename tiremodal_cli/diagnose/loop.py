@@ -35,9 +35,11 @@ from typing import NamedTuple
 
 from tiremodal_cli.diagnose.aliases import recheck
 from tiremodal_cli.diagnose.candidates import choose, try_candidate
+from tiremodal_cli.diagnose.cavity import unexplained_band_modes
+from tiremodal_cli.diagnose.identifiability import mark_undetermined, profile_rim_mass
 from tiremodal_cli.diagnose.options import PARAMETER_CANDIDATES, DiagnoseOptions, fit_options
 from tiremodal_cli.diagnose.refit import Trial, refit_robust
-from tiremodal_cli.diagnose.result import Candidate, Diagnosis, report, verdict_text
+from tiremodal_cli.diagnose.result import Candidate, Diagnosis, profile_text, report, verdict_text
 from tiremodal_cli.diagnose.statistics import residual_analysis
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.tyre.effects import EFFECTS
@@ -148,15 +150,19 @@ def diagnose(rows, base_params: TyreParameters = TyreParameters(), opt: Diagnose
     ticks()
     nominal = {k: float(getattr(base_params, k)) for k in ("k_r1", "k_r2", "EI", "rhoA", "m_s", "b")}
     s = _search(base, names, tuple(measured.unexplained), n_points, opt, nominal, ticks)
+    profile = profile_rim_mass(s.current, opt)
+    if profile is not None and not profile["determined"]:
+        s.current = dataclasses.replace(s.current, fit=mark_undetermined(s.current.fit, profile))
     ticks.finish()
     explained = {round(c["frequency_hz"], 6) for c in s.cavity_modes}
     unexplained = tuple(u for u in measured.unexplained if round(u["frequency_hz"], 6) not in explained)
-    verdict = verdict_text(s.adopted, s.tried, s.residual_before, s.residual_now, unexplained)
+    verdict = "; ".join(t for t in (verdict_text(s.adopted, s.tried, s.residual_before, s.residual_now, unexplained),
+                                    profile_text(profile)) if t)
     return Diagnosis(base=base.fit, augmented=s.current.fit, adopted=tuple(s.adopted), candidates=tuple(s.tried),
                      residual_before=s.residual_before, residual_after=s.residual_now, unexplained=unexplained,
                      cavity_modes=tuple(s.cavity_modes), relabelled=tuple(s.relabelled),
                      skipped_rows=tuple(measured.skipped), verdict=verdict, options=opt, base_robust=base,
-                     augmented_robust=s.current)
+                     augmented_robust=s.current, rim_profile=profile)
 
 
 @dataclass
@@ -174,7 +180,9 @@ class _Search:
 
 def _search(base: RobustFit, names, extra: tuple, n_points, opt: DiagnoseOptions, nominal: dict, ticks) -> _Search:
     """Rounds of candidates on top of the current model until the residual is at the level of
-    the noise, no candidate passes, or ``max_effects`` are adopted.
+    the noise, no candidate passes, or ``max_effects`` are adopted — and then one more round
+    of the acoustic candidate alone while a cavity-band mode stays unexplained
+    (:func:`_cavity_pending`).
 
     A set-aside mode is first the candidates' evidence under the order it was measured with;
     only a mode that no adopted candidate brings back is tested as a spatial alias of
@@ -182,11 +190,13 @@ def _search(base: RobustFit, names, extra: tuple, n_points, opt: DiagnoseOptions
     the relabelled modes. (Relabelled first, a mode that a missing effect moved — the
     membrane's high-n same-branch modes, on a branch the base model holds flat — finds an
     alias on the flat branch and testifies against the effect that explains it.)"""
-    before = residual_analysis(base, opt, n_extra=len(extra))
+    before = _residual(base, opt, extra, ())
     s = _Search(current=base, residual_before=before, residual_now=before)
     rnd, retried = 1, False
-    while rnd <= opt.max_effects:
-        best = _round(s, rnd, names, extra, opt, nominal, ticks) if s.residual_now["exceeds_noise"] or rnd == 1 \
+    while rnd <= opt.max_effects or (opt.max_effects > 0 and _cavity_pending(s, names)):
+        pool = names if rnd <= opt.max_effects else [n for n in names if n in EFFECTS
+                                                       and EFFECTS[n].kind == "acoustic"]
+        best = _round(s, rnd, pool, extra, opt, nominal, ticks) if s.residual_now["exceeds_noise"] or rnd == 1 \
             else None
         if best is None:
             if retried or not _relabel(s, n_points, opt, extra):
@@ -197,12 +207,23 @@ def _search(base: RobustFit, names, extra: tuple, n_points, opt: DiagnoseOptions
         s.current = _adopted_model(best, opt)
         if best.cavity_mode is not None:
             s.cavity_modes.append(best.cavity_mode)
-        s.residual_now = residual_analysis(s.current, opt, n_extra=len(extra) - len(s.cavity_modes))
+        s.residual_now = _residual(s.current, opt, extra, s.cavity_modes)
         _relabel(s, n_points, opt, extra)
         rnd, retried = rnd + 1, False
         if not s.residual_now["exceeds_noise"]:
             break
     return s
+
+
+def _cavity_pending(s: _Search, names) -> bool:
+    """A mode with an n = 1 pattern in the cavity band that fits no structural (n, branch)
+    and that the current model leaves beyond its outlier limit, and no cavity adopted yet:
+    a measured mode no structural effect can explain, whatever ``max_effects`` allows the
+    structural residual — the air cavity, which only it can explain, gets a round of its
+    own (one candidate, so its F-test is at α)."""
+    band = s.residual_now.get("unexplained_band_modes", [])
+    return ("air_cavity" in names and "air_cavity" not in s.adopted
+            and any(b["z"] > s.current.z_crit for b in band))
 
 
 def _round(s: _Search, rnd: int, names, extra, opt, nominal, ticks):
@@ -226,8 +247,16 @@ def _relabel(s: _Search, n_points, opt, extra) -> bool:
         return False
     s.current = current
     s.relabelled.extend(changed)
-    s.residual_now = residual_analysis(current, opt, n_extra=len(extra) - len(s.cavity_modes))
+    s.residual_now = _residual(current, opt, extra, s.cavity_modes)
     return True
+
+
+def _residual(rf: RobustFit, opt: DiagnoseOptions, extra, cavity_modes) -> dict:
+    """The residual of ``rf`` against the noise, counting the cavity band's unexplained
+    n = 1 modes (those an adopted cavity did not take) as measured modes it must explain."""
+    taken = [c["frequency_hz"] for c in cavity_modes]
+    band = unexplained_band_modes(rf, extra, opt, taken)
+    return residual_analysis(rf, opt, n_extra=len(extra) - len(cavity_modes), band=band)
 
 
 def _adopted_model(best: Candidate, opt: DiagnoseOptions) -> RobustFit:

@@ -76,10 +76,26 @@ class Diagnosis:
     options: DiagnoseOptions
     base_robust: RobustFit | None = None
     augmented_robust: RobustFit | None = None
+    #: the final model's rim-mass profile when it frees m_w
+    #: (:func:`tiremodal_cli.diagnose.identifiability.profile_rim_mass`)
+    rim_profile: dict | None = None
 
     def to_dict(self, n_max: int = 12) -> dict:
         """The diagnosis as JSON-ready data (:func:`report`; predictions up to order ``n_max``)."""
         return report(self, n_max)
+
+
+def profile_text(profile: dict | None) -> str:
+    """The rim-mass profile's verdict in words ("" when m_w is not fitted or is determined)."""
+    if not profile or profile["determined"]:
+        return ""
+    lo, hi = min(profile["inside"]), max(profile["inside"])
+    r = profile.get("ridge")
+    line = (f"; what they determine is the rim's frequency on its supports, k_f = {r['k0_n_per_m']:.3g} N/m + "
+            f"m_w (2π · {r['f_w_hz']:.3g} Hz)² (within {100 * r['max_rel_deviation']:.1f} % along the set)"
+            if r else "")
+    return (f"the rim mass is not unique: the modes fit within the χ² limit for m_w from {lo:.3g} to {hi:.3g} kg"
+            + (f" ({', '.join(profile['moves'])} moving with it)" if profile["moves"] else "") + line)
 
 
 def verdict_text(adopted, tried, before, after, unexplained) -> str:
@@ -167,6 +183,7 @@ def _report(diag, n_max):
                               for u in diag.unexplained],
         "cavity_modes": list(diag.cavity_modes),
         "relabelled_modes": list(diag.relabelled),
+        "rim_mass_profile": diag.rim_profile,
         "set_aside_before": list(diag.residual_before.get("set_aside", [])),
         "set_aside_after": list(diag.residual_after.get("set_aside", [])),
         "outlier_rule": {"z_crit_before": diag.residual_before.get("z_crit"),

@@ -24,7 +24,7 @@ def sigma_rel(modes) -> np.ndarray:
     return np.array([m.uncertainty_hz / m.frequency_hz for m in modes])
 
 
-def residual_analysis(rf: RobustFit, opt: DiagnoseOptions, *, n_extra: int = 0) -> dict:
+def residual_analysis(rf: RobustFit, opt: DiagnoseOptions, *, n_extra: int = 0, band=()) -> dict:
     """The residual of a robust fit against the noise, and its pattern.
 
     Returns a dict: per kept mode ``z`` (error / σ), ``chi2``, ``dof``, ``p_value`` of the
@@ -34,15 +34,44 @@ def residual_analysis(rf: RobustFit, opt: DiagnoseOptions, *, n_extra: int = 0) 
     of the error with n (slope %/order and its t), the number of sign changes along n,
     isolated outliers (|z| > 3 and > 4 robust deviations from the branch's median), split
     pairs (one (n, branch) measured twice), and a list of plain-language ``findings``.
+
+    ``band``: the cavity band's n = 1 modes that fit no structural (n, branch), each with
+    ``z``, its distance from the model's nearest n = 1 mode over the noise floor
+    (:func:`tiremodal_cli.diagnose.cavity.unexplained_band_modes`): measured modes the model
+    must explain, counted in the χ² (one degree of freedom each) and listed as
+    ``unexplained_band_modes``.
     """
     res, modes = rf.fit, list(rf.kept)
     err = np.array([m["error_pct"] for m in res.modes])
     sig = 100 * sigma_rel(modes)
     z = err / sig
     k = len(res.free)
-    dof = max(len(modes) - k, 1)
-    chi2 = float(np.sum(z**2))
+    zb = np.array([b["z"] for b in band], dtype=float)
+    dof = max(len(modes) + zb.size - k, 1)
+    chi2 = float(np.sum(z**2) + np.sum(np.minimum(zb, 1e6) ** 2))
     p = float(scipy.special.chdtrc(dof, chi2))  # χ² survival function (scipy.stats costs 0.4 s to import)
+    pattern = _branch_pattern(modes, err, sig, z)
+    pairs = {}
+    for m in modes:
+        if m.member:
+            pairs.setdefault((m.n, m.branch), []).append(m.frequency_hz)
+    pattern["split_pairs"] = [{"n": n, "branch": b, "frequencies_hz": sorted(f),
+                               "splitting_pct": float(100 * (max(f) - min(f)) / np.mean(f))}
+                              for (n, b), f in sorted(pairs.items())]
+    pattern["findings"] = _findings(pattern, chi2, dof, p, opt, n_extra, rf.set_aside) + [
+        f"n = 1 mode at {b['frequency_hz']:.1f} Hz in the cavity band that no model mode explains "
+        f"(nearest n = 1 at {b['model_hz']:.1f} Hz, z = {b['z']:.0f})" for b in band if b["z"] > 3]
+    return {"modes": [{**m, "sigma_pct": float(s), "z": float(zz)} for m, s, zz in zip(res.modes, sig, z)],
+            "chi2": chi2, "dof": dof, "p_value": p, "exceeds_noise": bool(p < opt.alpha or rf.set_aside),
+            "set_aside": [a.to_dict() for a in rf.set_aside], "z_crit": rf.z_crit,
+            "unexplained_band_modes": [dict(b) for b in band],
+            "rms_error_pct": res.rms_error_pct, "max_error_pct": res.max_error_pct,
+            "noise_floor_pct": opt.noise_floor_pct, "pattern": pattern}
+
+
+def _branch_pattern(modes, err, sig, z) -> dict:
+    """Per branch the trend of the error with n, its sign changes, and isolated outliers
+    (the ``pattern`` of :func:`residual_analysis`, split pairs and findings still empty)."""
     ns = np.array([m.n for m in modes])
     br = np.array([m.branch for m in modes])
     pattern = {"branches": {}, "outliers": [], "split_pairs": [], "findings": []}
@@ -70,19 +99,7 @@ def residual_analysis(rf: RobustFit, opt: DiagnoseOptions, *, n_extra: int = 0) 
             if abs(z[i]) > 3 and abs(err[i] - med) > 4 * max(mad, 1e-9):
                 pattern["outliers"].append({"n": int(ns[i]), "branch": b, "error_pct": float(err[i]),
                                             "z": float(z[i])})
-    pairs = {}
-    for m in modes:
-        if m.member:
-            pairs.setdefault((m.n, m.branch), []).append(m.frequency_hz)
-    pattern["split_pairs"] = [{"n": n, "branch": b, "frequencies_hz": sorted(f),
-                               "splitting_pct": float(100 * (max(f) - min(f)) / np.mean(f))}
-                              for (n, b), f in sorted(pairs.items())]
-    pattern["findings"] = _findings(pattern, chi2, dof, p, opt, n_extra, rf.set_aside)
-    return {"modes": [{**m, "sigma_pct": float(s), "z": float(zz)} for m, s, zz in zip(res.modes, sig, z)],
-            "chi2": chi2, "dof": dof, "p_value": p, "exceeds_noise": bool(p < opt.alpha or rf.set_aside),
-            "set_aside": [a.to_dict() for a in rf.set_aside], "z_crit": rf.z_crit,
-            "rms_error_pct": res.rms_error_pct, "max_error_pct": res.max_error_pct,
-            "noise_floor_pct": opt.noise_floor_pct, "pattern": pattern}
+    return pattern
 
 
 def _findings(pattern, chi2, dof, p, opt, n_extra, set_aside=()) -> list[str]:
