@@ -159,9 +159,8 @@ def _search(obj: Objective, names, logb, opt: FitOptions) -> np.ndarray:
     # the full search contains the local one: the whole local search from the start (least
     # squares and its safeguard) and least squares from the extra starts, the lowest end
     # wins — DE with the start in its population may still leave a narrow basin next to it
-    # unexplored (a Timoshenko tread's; a light rim on its fixture, where it ended at 4.8 %
-    # RMS against the local search's 0.19 %), and a reference search must never end above
-    # the local search it is the reference of
+    # unexplored (a Timoshenko tread's), and a reference search must never end above the
+    # local search from the same start
     if x0 is None:
         return x
     ends = [_local_search(obj.objective_batch, obj.residuals, x0, logb, opt, lsq, obj.history)]
