@@ -152,8 +152,9 @@ def adopt_reason(c: Candidate, runner: Candidate | None) -> str:
     if c.brought_back:
         s += "; brings back " + ", ".join(f"n = {b['n']} {b['branch']} at {b['frequency_hz']:.1f} Hz"
                                           for b in c.brought_back)
-    if runner is not None:
-        s += f"; runner-up {runner.name} (ΔAICc {runner.delta_aicc:+.1f})"
+    if runner is not None:  # (a runner-up with more evidence was refused: say why, or the reader is left puzzled)
+        s += (f"; runner-up {runner.name} (ΔAICc {runner.delta_aicc:+.1f}"
+              + ("" if runner.passes else f", refused: {runner.reason}") + ")")
     return s
 
 
