@@ -83,3 +83,28 @@ def test_every_help_ends_with_an_example_that_uses_its_own_options():
         assert words[:2] == ["tiremodal", name], (name, last)
         known = {o for p in cmd.params for o in getattr(p, "opts", []) + getattr(p, "secondary_opts", [])}
         assert {w for w in words if w.startswith("-")} <= known, (name, last)
+
+
+def test_run_on_short_records_lowers_the_model_order_to_the_band(tmp_path, caplog):
+    """run has no order option: records too short for its default order (128 samples at
+    1,024 Hz: 8 Hz lines) are analysed at the highest order the band's K lines allow
+    (K/2 − 1), said in a warning, instead of failing with an order the user cannot change;
+    too short for any stable mode (64 samples) is one line naming the file, exit 2."""
+    import json
+
+    from tiremodal_cli.io.measurement import write_measurement
+    from tiremodal_cli.io.modalfile import read_modal
+    from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
+
+    for n in (128, 64):
+        write_measurement(tmp_path / f"s{n}.h5", simulate(SimulationConfig(n_samples=n, sample_rate=1024.0, seed=2)).measurement)
+    res = run_cli(["run", tmp_path / "s128.h5", "-o", tmp_path / "r128"])
+    assert res.exit_code == 0, res.output
+    assert "model order lowered from 40 to" in caplog.text
+    meta = read_modal(tmp_path / "r128" / "modal.h5").meta
+    lines = round((meta["band_hz"][1] - meta["band_hz"][0]) / 8.0) + 1
+    assert meta["max_order"] == lines // 2 - 1
+    assert json.loads((tmp_path / "r128" / "run.json").read_text())["summary"]["modes_found"] > 0
+    res = run_cli(["run", tmp_path / "s64.h5", "-o", tmp_path / "r64"])
+    assert res.exit_code == 2 and str(tmp_path / "s64.h5") in res.stderr and "longer records" in res.stderr
+    assert not (tmp_path / "r64").exists()

@@ -54,6 +54,8 @@ class ModalOptions:
     skip : LSCE's first impulse-response sample in the autoregression (single reference)
     workers : threads that solve a poly-reference sweep's model orders (LAPACK releases the
               GIL; the poles are the same to the bit whatever the number)
+    order_within_band : lower the sweep's highest order to what the band's lines allow
+              (K/2 − 1 for K lines) instead of refusing it (``run``, which has no order option)
     """
 
     band_hz: tuple[float, float] | None = None
@@ -67,6 +69,7 @@ class ModalOptions:
     poly_order: int = 30
     skip: int = 0
     workers: int = 1
+    order_within_band: bool = False
 
     def check(self):
         if self.spatial not in ("auto", "on", "off"):
@@ -198,13 +201,17 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
         if progress:
             progress(i + 1, len(groups))
     if not found:
-        raise DataFormatError("no stable mode found in the band; widen the band or raise --max-order")
+        raise DataFormatError(f"no stable mode found in the band ({band.freq[0]:g}–{band.freq[-1]:g} Hz, "
+                              f"{band.freq.size} lines, model orders up to {group_max}); allowed: a band that holds "
+                              "modes (widen it), a higher --max-order (lsce), or longer records (more lines)")
     if spatial and grid_points(point_angle) > len(point_angle):  # points missing: every order leaks
         found, copies = leak_copies(found, leakage(point_angle))
         rejected += copies
     modes, edge = off_edges(merge_groups(found), band.freq[0], band.freq[-1], exp_tau_s)
     if not modes:
-        raise DataFormatError("no stable mode found inside the band; widen the band or raise --max-order")
+        raise DataFormatError(f"no stable mode found inside the band ({band.freq[0]:g}–{band.freq[-1]:g} Hz, "
+                              f"{band.freq.size} lines, model orders up to {group_max}); allowed: a band that holds "
+                              "modes (widen it), a higher --max-order (lsce), or longer records (more lines)")
     meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
             "max_order": int(group_max), "exp_tau_s": exp_tau_s}
     return _result(band, H.shape, modes, synth, exp_tau_s, diagrams=diagrams, rejected=rejected + edge, meta=meta)
@@ -267,8 +274,13 @@ def _order_groups(band: _Band, point_angle, spatial: bool, opt: ModalOptions):
         groups = {-1: (band.Hb.reshape(-1, K), np.eye(n_live * n_p))}
         group_max = opt.max_order
     if group_max + 1 > K // 2:
-        raise ParameterError(f"model order {group_max} is too high for {K} lines in the band "
-                             f"(allowed up to {K // 2 - 1})")
+        if not opt.order_within_band or K // 2 - 1 < 2:
+            raise ParameterError(f"model order {group_max} is too high for {K} lines in the band "
+                                 f"(allowed up to {K // 2 - 1}; the band's lines: longer records or a wider band give more)")
+        log.warning("model order lowered from %d to %d: the band holds %d lines (short records)", group_max,
+                    K // 2 - 1, K)
+        group_max = K // 2 - 1
+        opt = replace(opt, poly_order=min(opt.poly_order, max(1, group_max // 2)))
     return groups, group_max, opt
 
 

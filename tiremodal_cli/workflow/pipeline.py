@@ -114,7 +114,10 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
                         "sha256": sha}
     write_frf(outdir / "frf.h5", r, input_file=str(source["path"]), input_sha256=sha, overwrite=True)
     say("lsce")
-    table = _modal_stage(r, force_g, opt, outdir)
+    try:
+        table = _modal_stage(r, force_g, opt, outdir)
+    except DataFormatError as exc:  # (no stable mode: say which test)
+        raise DataFormatError(f"{source['path']}: {exc}") from None
     ident, rep = _model_stages(table, params, rim_how, opt, source, outdir, say)
     summary = _summary(source, meta, rim_how, r, table, ident, rep, time.perf_counter() - t0)
     names = list(OUTPUTS) + ([paths[0].name] if paths[0].parent.resolve() == outdir.resolve() else [])
@@ -173,7 +176,8 @@ def thread_budget() -> int:
 def _modal_stage(r, force_g, opt: RunOptions, outdir: Path):
     """The modal table of the FRFs, written as modal.h5 and modes.csv (the poly-reference
     sweeps' model orders solved in :func:`thread_budget` threads: the same poles)."""
-    mopt = ModalOptions(band_hz=None if opt.band is None else tuple(opt.band), workers=thread_budget())
+    mopt = ModalOptions(band_hz=None if opt.band is None else tuple(opt.band), workers=thread_budget(),
+                        order_within_band=True)  # (run has no order option: short records lower it)
     table, _ = modal_table_from_frf(r, mopt, force_autospectrum=force_g)
     write_modal(outdir / "modal.h5", table, input_file="frf.h5",
                 input_sha256=sha256_file(outdir / "frf.h5"), overwrite=True)
