@@ -7,11 +7,16 @@ stated probability) and the hammer test's force-spectrum rule, applied over the 
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from tiremodal_cli.errors import DataFormatError, ParameterError
 
-__all__ = ["COHERENCE_ALPHA", "FORCE_DROP_DB", "coherence_threshold", "default_band", "band_or_every_line"]
+log = logging.getLogger(__name__)
+
+__all__ = ["COHERENCE_ALPHA", "FORCE_DROP_DB", "coherence_threshold", "default_band", "band_or_every_line",
+           "order_for_lines", "no_stable_mode"]
 
 
 #: probability that a line of pure noise passes the coherence test in one FRF
@@ -99,3 +104,24 @@ def band_or_every_line(freq_hz, band_hz) -> tuple[float, float]:
     if pos.size < 16:
         raise DataFormatError("fewer than 16 lines above 0 Hz")
     return (float(pos[0]), float(pos[-1]))
+
+
+def order_for_lines(order: int, n_lines: int, lower: bool) -> int:
+    """A sweep's highest model order for a band of ``n_lines`` lines (at most K/2 − 1):
+    ``order`` itself; when that is too high, the highest allowed if ``lower`` (said in a
+    warning: ``run`` has no order option), else ParameterError."""
+    top = n_lines // 2 - 1
+    if order <= top:
+        return order
+    if not lower or top < 2:
+        raise ParameterError(f"model order {order} is too high for {n_lines} lines in the band (allowed up to "
+                             f"{top}; the band's lines: longer records or a wider band give more)")
+    log.warning("model order lowered from %d to %d: the band holds %d lines (short records)", order, top, n_lines)
+    return top
+
+
+def no_stable_mode(freq_hz, order: int) -> DataFormatError:
+    """The error for a sweep that found no stable mode: the band, its lines, the orders, what helps."""
+    return DataFormatError(f"no stable mode found in the band ({freq_hz[0]:g}–{freq_hz[-1]:g} Hz, {len(freq_hz)} "
+                           f"lines, model orders up to {order}); allowed: a band that holds modes (widen it), a "
+                           "higher --max-order (lsce), or longer records (more lines)")

@@ -18,7 +18,7 @@ from threadpoolctl import threadpool_limits
 from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.errors import DataFormatError, ParameterError
 from tiremodal_cli.frf.windows import correct_poles
-from tiremodal_cli.modal.band import band_or_every_line, default_band
+from tiremodal_cli.modal.band import band_or_every_line, default_band, no_stable_mode, order_for_lines
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
@@ -54,8 +54,7 @@ class ModalOptions:
     skip : LSCE's first impulse-response sample in the autoregression (single reference)
     workers : threads that solve a poly-reference sweep's model orders (LAPACK releases the
               GIL; the poles are the same to the bit whatever the number)
-    order_within_band : lower the sweep's highest order to what the band's lines allow
-              (K/2 − 1 for K lines) instead of refusing it (``run``, which has no order option)
+    order_within_band : lower the highest order to what the band's lines allow (``run``)
     """
 
     band_hz: tuple[float, float] | None = None
@@ -201,17 +200,13 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
         if progress:
             progress(i + 1, len(groups))
     if not found:
-        raise DataFormatError(f"no stable mode found in the band ({band.freq[0]:g}–{band.freq[-1]:g} Hz, "
-                              f"{band.freq.size} lines, model orders up to {group_max}); allowed: a band that holds "
-                              "modes (widen it), a higher --max-order (lsce), or longer records (more lines)")
+        raise no_stable_mode(band.freq, group_max)
     if spatial and grid_points(point_angle) > len(point_angle):  # points missing: every order leaks
         found, copies = leak_copies(found, leakage(point_angle))
         rejected += copies
     modes, edge = off_edges(merge_groups(found), band.freq[0], band.freq[-1], exp_tau_s)
     if not modes:
-        raise DataFormatError(f"no stable mode found inside the band ({band.freq[0]:g}–{band.freq[-1]:g} Hz, "
-                              f"{band.freq.size} lines, model orders up to {group_max}); allowed: a band that holds "
-                              "modes (widen it), a higher --max-order (lsce), or longer records (more lines)")
+        raise no_stable_mode(band.freq, group_max)
     meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
             "max_order": int(group_max), "exp_tau_s": exp_tau_s}
     return _result(band, H.shape, modes, synth, exp_tau_s, diagrams=diagrams, rejected=rejected + edge, meta=meta)
@@ -273,14 +268,9 @@ def _order_groups(band: _Band, point_angle, spatial: bool, opt: ModalOptions):
     else:
         groups = {-1: (band.Hb.reshape(-1, K), np.eye(n_live * n_p))}
         group_max = opt.max_order
-    if group_max + 1 > K // 2:
-        if not opt.order_within_band or K // 2 - 1 < 2:
-            raise ParameterError(f"model order {group_max} is too high for {K} lines in the band "
-                                 f"(allowed up to {K // 2 - 1}; the band's lines: longer records or a wider band give more)")
-        log.warning("model order lowered from %d to %d: the band holds %d lines (short records)", group_max,
-                    K // 2 - 1, K)
-        group_max = K // 2 - 1
-        opt = replace(opt, poly_order=min(opt.poly_order, max(1, group_max // 2)))
+    top = order_for_lines(group_max, K, opt.order_within_band)
+    if top < group_max:  # (short records, for run)
+        group_max, opt = top, replace(opt, poly_order=min(opt.poly_order, max(1, top // 2)))
     return groups, group_max, opt
 
 
