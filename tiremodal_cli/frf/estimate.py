@@ -1,7 +1,7 @@
 """FRF estimation from impact records: H1, H2, Hv, coherence, hit-quality checks.
 
-Conventions (``docs/conventions.md``): spectra are ``numpy.fft.rfft`` of the windowed
-records; the cross-spectrum is ``G_fy = Σ_hits conj(F) Y`` (conjugate of the force's FFT
+Conventions (``docs/conventions.md``): spectra are the real FFT of the windowed records
+(``scipy.fft.rfft``: the same transform as ``numpy.fft.rfft``, 2–3 × faster in single precision); the cross-spectrum is ``G_fy = Σ_hits conj(F) Y`` (conjugate of the force's FFT
 times the response's FFT, as in :func:`scipy.signal.csd`); auto-spectra ``G_ff = Σ |F|²``,
 ``G_yy = Σ |Y|²``. Then
 
@@ -25,6 +25,7 @@ import logging
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.fft
 
 from tiremodal_cli.conventions import FRF_FORMS
 from tiremodal_cli.errors import DataFormatError, ParameterError
@@ -169,8 +170,8 @@ def h1(force, response, fs: float, *, exp_end: float | None = None):
     response = np.asarray(response, dtype=float)
     n = force.shape[-1]
     w = exponential_window(n, fs, end_value=exp_end)[0] if exp_end else 1.0
-    F = np.fft.rfft(force * w, axis=-1)
-    Y = np.fft.rfft(response * w, axis=-1)
+    F = scipy.fft.rfft(force * w, axis=-1)
+    Y = scipy.fft.rfft(response * w, axis=-1)
     H, coh = estimate(F[:, None, :], Y)
     return np.fft.rfftfreq(n, 1 / fs), H, coh
 
@@ -330,8 +331,8 @@ def _hit_products(f, y, acc, extent, plan: _Plan, opt: FRFOptions):
     if plan.exp_w is not None:
         f = f * plan.exp_w
         y = y * plan.exp_w
-    F = np.fft.rfft(f, axis=-1)[:, plan.lo:plan.hi + 1]
-    Y = np.fft.rfft(y, axis=-1)[:, :, plan.lo:plan.hi + 1]
+    F = scipy.fft.rfft(f, axis=-1)[:, plan.lo:plan.hi + 1]
+    Y = scipy.fft.rfft(y, axis=-1)[:, :, plan.lo:plan.hi + 1]
     a = np.conj(F)[:, None, :] * Y
     p = (F.real**2 + F.imag**2)[:, None, :]
     e = Y.real**2 + Y.imag**2

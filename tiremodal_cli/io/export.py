@@ -31,7 +31,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pyuff
 
 from tiremodal_cli.errors import DataFormatError, ParameterError
 from tiremodal_cli.io.files import check_overwrite, install_dir
@@ -158,6 +157,7 @@ def uff_datasets(s: ShapeSet, *, name: str = "tiremodal") -> list[dict]:
     know the first, some newer ones only the second, e.g. SDynPy), 82 (one closed trace
     line per ring) and 55 (one complex shape per mode: analysis type 3, complex eigenvalue,
     with the pole as eigenvalue) as pyuff dataset dictionaries."""
+    import pyuff  # (imported when used: 20 ms of every start-up otherwise)
     nodes = dict(node_nums=s.node.tolist(), def_cs=[0] * s.node.size, disp_cs=[0] * s.node.size,
                  color=[1] * s.node.size, x=s.xyz_m[:, 0].tolist(), y=s.xyz_m[:, 1].tolist(),
                  z=s.xyz_m[:, 2].tolist())
@@ -181,6 +181,7 @@ def uff_datasets(s: ShapeSet, *, name: str = "tiremodal") -> list[dict]:
 def write_uff(path, s: ShapeSet, *, name: str = "tiremodal") -> None:
     """Write :func:`uff_datasets` to one UFF file at ``path`` (which must not exist: the
     caller writes into a temporary name and renames it, see ``files.atomic_path``)."""
+    import pyuff  # (imported when used: 20 ms of every start-up otherwise)
     u = pyuff.UFF(str(path))
     for ds in uff_datasets(s, name=name):
         u.write_sets(ds, mode="add")

@@ -17,7 +17,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pyuff
 
 from tiremodal_cli import __version__
 from tiremodal_cli.conventions import FORM_UNITS
@@ -68,6 +67,7 @@ def write_frf_uff(path, r: FRFResult, *, point_node0: int = 101, test_name: str 
     -------
     pathlib.Path
     """
+    import pyuff  # (imported when used: 20 ms of every start-up otherwise)
     date = datetime.datetime.now().strftime("%d-%b-%y %H:%M:%S")
     sets = []
     for ic, name in enumerate(r.channel_name):
@@ -85,6 +85,7 @@ def write_frf_uff(path, r: FRFResult, *, point_node0: int = 101, test_name: str 
 
 def _frf_and_coherence_sets(r: FRFResult, ic: int, ip: int, *, node0: int, date: str, test_name: str) -> list:
     """The two datasets 58 of channel ``ic`` and point ``ip``: the FRF and its coherence."""
+    import pyuff  # (imported when used: 20 ms of every start-up otherwise)
     name = r.channel_name[ic]
     common = dict(_COMMON_58, rsp_ent_name=name[:10], rsp_node=ic + 1, ref_node=node0 + int(r.point_index[ip]),
                   abscissa_min=float(r.freq_hz[0]), abscissa_inc=float(r.freq_hz[1] - r.freq_hz[0]),
@@ -102,6 +103,7 @@ def _frf_and_coherence_sets(r: FRFResult, ic: int, ip: int, *, node0: int, date:
 
 def _read_sets(paths) -> list[dict]:
     """Every dataset of the UFF files, in order."""
+    import pyuff  # (imported when used: 20 ms of every start-up otherwise)
     sets = []
     for p in paths:
         try:

@@ -126,8 +126,9 @@ def _start_vector(start: dict, names, logb, fallback) -> np.ndarray:
 def _search(obj: Objective, names, logb, opt: FitOptions) -> np.ndarray:
     """The optimum (log parameters): least squares from the start (``polish``), a local
     search safeguarded by a short global one (``local``), or differential evolution and a
-    least-squares polish (``global``, and any search without a start; with a start, least
-    squares from it and from the extra starts as well, so that it contains the local search)."""
+    least-squares polish (``global``, and any search without a start; with a start, the
+    whole local search from it and least squares from the extra starts as well, so that it
+    contains the local search)."""
     x0 = _start_vector(opt.start, names, logb, logb.mean(axis=1)) if opt.start else None
     jac = lambda x: jacobian(obj.residuals_batch, x)  # noqa: E731
     # the Jacobian by central differences, its 2k points in one array call; the polish stops
@@ -155,12 +156,18 @@ def _search(obj: Objective, names, logb, opt: FitOptions) -> np.ndarray:
         init="latinhypercube", x0=x0)
     ls = scipy.optimize.least_squares(obj.residuals, de.x, **lsq)
     x = ls.x if obj.objective(ls.x) <= de.fun else de.x
-    # the full search contains the local one: least squares from the start (and the extra
-    # starts) too, the lowest end wins — DE with the start in its population may still
-    # leave a narrow basin next to it unexplored (a Timoshenko tread's), and a reference
-    # search must never end above the local search it is the reference of
-    for start in ((x0,) + tuple(_start_vector(e, names, logb, x0) for e in opt.extra_starts)) if x0 is not None else ():
-        x1 = scipy.optimize.least_squares(obj.residuals, start, **lsq).x
+    # the full search contains the local one: the whole local search from the start (least
+    # squares and its safeguard) and least squares from the extra starts, the lowest end
+    # wins — DE with the start in its population may still leave a narrow basin next to it
+    # unexplored (a Timoshenko tread's; a light rim on its fixture, where it ended at 4.8 %
+    # RMS against the local search's 0.19 %), and a reference search must never end above
+    # the local search it is the reference of
+    if x0 is None:
+        return x
+    ends = [_local_search(obj.objective_batch, obj.residuals, x0, logb, opt, lsq, obj.history)]
+    ends += [scipy.optimize.least_squares(obj.residuals, _start_vector(e, names, logb, x0), **lsq).x
+             for e in opt.extra_starts]
+    for x1 in ends:
         if obj.objective(x1) < obj.objective(x):
             x = x1
     return x

@@ -15,6 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import scipy.fft
 from threadpoolctl import threadpool_info
 
 from tiremodal_cli.diagnose.loop import DiagnoseOptions, base_fit, diagnose, report, usable_modes
@@ -218,7 +219,7 @@ def _force_autospectrum(m, freq_hz):
     for ip in range(m.n_points):
         f = np.asarray(m.force[ip], dtype=float)
         f = np.where(np.isfinite(f), f, 0.0)
-        acc += np.sum(np.abs(np.fft.rfft(f, axis=-1)[..., k]) ** 2, axis=0)
+        acc += np.sum(np.abs(scipy.fft.rfft(f, axis=-1)[..., k]) ** 2, axis=0)
     return acc
 
 

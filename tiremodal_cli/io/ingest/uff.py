@@ -17,7 +17,6 @@ from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
-import pyuff
 
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import atomic_path
@@ -50,6 +49,7 @@ def uff_files(paths) -> list[Path]:
 
 
 def _sets(path: Path) -> list[dict]:
+    import pyuff  # (imported when used: 20 ms of every start-up otherwise)
     try:
         sets = pyuff.UFF(str(path)).read_sets()
     except Exception as exc:  # pyuff raises bare Exception/ValueError/IndexError on bad files
@@ -180,6 +180,7 @@ def write_uff_time(folder: str | os.PathLike, m: Measurement, *, point_node0: in
     Points are nodes ``point_node0 + i`` (direction +Z = 3, radial), channels nodes
     ``1 … n_channels`` (direction 3). Returns the files and the mapping dict (TOML-ready).
     """
+    import pyuff  # (imported when used: 20 ms of every start-up otherwise)
     folder = Path(folder)
     files = []
     for ip in range(m.n_points):
