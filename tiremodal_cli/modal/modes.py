@@ -297,10 +297,11 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
     d = stabilize(b, _group_poles(data, b, spatial, group_max), data.opt.stabilization)
     s = np.array([c.representative.s for c in d.selected()], dtype=complex)
     parts = [c.representative.participation for c in d.selected()]
+    std = np.array([c.frequency_std_hz for c in d.selected()])
     if s.size and all(pt is not None for pt in parts):
-        fit, s, rej, refit = fit_group_poly(data, s, np.array(parts))
+        fit, s, rej, refit = fit_group_poly(data, s, np.array(parts), std)
     else:
-        fit, s, rej, refit = fit_group(data, s)
+        fit, s, rej, refit = fit_group(data, s, std)
     if fit is None:
         return d, [], rej, None
     scatter = {c.representative.s: c.frequency_std_hz for c in d.selected()}

@@ -1,0 +1,48 @@
+"""A weak mode on a peak of its own is judged against the noise, not as a share of the
+response (docs/lsce.md, "Automatic selection", step 5; :func:`tiremodal_cli.modal.groupfit.own_peaks`)."""
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from tiremodal_cli.modal.lsfd import synthesize
+from tiremodal_cli.modal.modes import ModalOptions, estimate_modes
+
+ZETA = 0.02
+FN = np.array([100.0, 400.0])
+
+
+def _frf(weak_over_noise: float, seed: int):
+    """One accelerance FRF: a strong mode at 100 Hz and, far above it on its mass line, a
+    mode whose peak is ``weak_over_noise`` × the noise RMS per line (complex white noise)."""
+    rng = np.random.default_rng(seed)
+    s = -ZETA * 2 * np.pi * FN + 1j * 2 * np.pi * FN * np.sqrt(1 - ZETA**2)
+    f = np.arange(0, 600, 0.25)
+    noise = 1e-3
+    peak_unit = np.abs(s[1]) ** 2 / abs(s[1].real)  # |peak| of a unit residue in accelerance
+    R = np.array([[1.0, weak_over_noise * noise / peak_unit]]) * np.array([[5.0 / np.abs(synthesize(
+        [FN[0]], np.ones((1, 1)), s[:1], form="accelerance")[0, 0]), 1.0]])
+    H = synthesize(f, R, s, form="accelerance")
+    H = H + noise / np.sqrt(2) * (rng.standard_normal(H.shape) + 1j * rng.standard_normal(H.shape))
+    return f, H[:, None, :]
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_weak_mode_far_above_a_strong_one_is_kept(seed):
+    """A mode whose peak is 20 × the noise but which explains under 5 % of the response in
+    its half-power band (the strong mode's mass line dominates there) is found within 0.1 %;
+    the old share rule dropped it."""
+    f, H = _frf(20.0, seed)
+    res = estimate_modes(f, H, form="accelerance", opt=ModalOptions(band_hz=(20, 580), max_order=30))
+    assert res.freq_hz.size == 2, res.freq_hz
+    assert_allclose(res.freq_hz, FN, rtol=1e-3)
+    assert res.significance[1] < 0.05  # the share alone would have dropped it
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_weak_mode_below_three_times_the_noise_is_not_reported(seed):
+    """The same mode at 1 × the noise: under the visibility rule (3 × the residual RMS),
+    not reported, and no other pole is."""
+    f, H = _frf(1.0, seed)
+    res = estimate_modes(f, H, form="accelerance", opt=ModalOptions(band_hz=(20, 580), max_order=30))
+    assert_allclose(res.freq_hz, FN[:1], rtol=1e-3)
