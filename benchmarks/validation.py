@@ -237,6 +237,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1252 / 1334 (94 %) | 30 / 1637 (1.8 %) | 0 | 14 / 14 | 7 / 14 | |
 | 2026-11-23, end of session 7 | failed points keep the test's grid (#14); a spare second-round parameter refused as compensation, aliases relabelled after the candidates, the breathing mode in the fit (#15); the base fit from a closed-form start (#19) | paper | 1133 / 1212 (93 %) | 30 / 1429 (2.1 %) | 0 | 14 / 14 | 11 / 13 | 3.4 min |
 | | | ring | 1268 / 1334 (95 %) | 21 / 1630 (1.3 %) | 0 | 14 / 14 | 11 / 14 | |
+| 2026-11-23, end of session 8 | a weak mode on a peak of its own judged against the noise (#14); an unexplained cavity-band mode in the χ² and the cavity's own round, a mass's split must be reproduced, the rim mass's profile (#15); scipy.fft in the FRF stage (#19) | paper | 1135 / 1212 (94 %) | 30 / 1431 (2.1 %) | 0 | 14 / 14 | 11 / 13 | 3.1 min |
+| | | ring | 1276 / 1334 (96 %) | 21 / 1639 (1.3 %) | 0 | 14 / 14 | 12 / 14 | |
 """
 
 
