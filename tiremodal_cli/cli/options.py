@@ -143,7 +143,7 @@ def read_table_rows(path: Path):
     path = Path(path)
     if path.suffix.lower() == ".csv":
         return read_modal_csv(path)
-    fmt = file_format(path)
+    fmt = file_format(path, "a modal file (HDF5, written by lsce) or a CSV named *.csv with frequency_hz, n, branch")
     if fmt != FORMAT_NAME:
         raise DataFormatError(f"{path}: format {fmt!r} is not a modal file or CSV; run 'tiremodal lsce' first")
     return to_rows(read_modal(path))

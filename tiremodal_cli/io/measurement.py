@@ -310,9 +310,11 @@ def write_measurement(path: str | os.PathLike, m: Measurement, *, overwrite: boo
     return Path(path)
 
 
-def file_format(path: str | os.PathLike) -> str:
-    """The ``format`` attribute of a tiremodal HDF5 file (DataFormatError if none)."""
-    with open_hdf5(path) as h:
+def file_format(path: str | os.PathLike,
+                what: str = "a tiremodal HDF5 file (measurement, FRFs or modes), or UFF named *.uff or *.unv") -> str:
+    """The ``format`` attribute of a tiremodal HDF5 file (DataFormatError if none; ``what``:
+    what the caller reads, said when the file is not HDF5 at all)."""
+    with open_hdf5(path, what) as h:
         fmt = attr_str(h.attrs, "format")
     if fmt is None:
         raise DataFormatError(f"{path}: not a tiremodal file (no root attribute 'format')")
