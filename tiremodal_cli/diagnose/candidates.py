@@ -17,7 +17,7 @@ from tiremodal_cli.tyre.fit_types import DEFAULT_BOUNDS
 from tiremodal_cli.tyre.model import NOMINAL_RIM_KG
 from tiremodal_cli.tyre.robust import RobustFit, robust_fit
 
-__all__ = ["try_candidate", "adopt_reason", "choose", "split_evidence"]
+__all__ = ["try_candidate", "adopt_reason", "choose", "split_evidence", "on_ridge"]
 
 
 def _effect_spec(name, fixed_effects):
@@ -88,11 +88,56 @@ def _try_effect(name: str, trial: Trial) -> Candidate:
                      start={**search_start(cur), **own},
                      extra_starts=({**search_start(cur), **(nominal or {}), **own},) if nominal else ())
     c = _judged(name, common, trial, cur.parameters, fo, Scoring(pnames, bounds, trial.opt, trial.n_tried))
+    ridge = [a for a in also if c.fit is not None and on_ridge(c.fit, a)]
+    if ridge:
+        # the modes do not determine them (a flat ridge): the point on the ridge is the one
+        # with them at the current model's values — found with them held, then polished with
+        # them free again (the gradient along the ridge is nil: they stay), so that the next
+        # round starts from the same model whatever path the search took along the ridge
+        held = {a: float(getattr(cur.parameters, a)) for a in ridge}
+        fo_h = dataclasses.replace(fo, free=tuple(f for f in fo.free if f not in ridge))
+        pn_h = tuple(q for q in pnames if q not in ridge)
+        c_h = _judged(name, common, trial, cur.parameters, fo_h,
+                      Scoring(pn_h, {k: v for k, v in bounds.items() if k in pn_h}, trial.opt, trial.n_tried))
+        if c_h.fit is not None:
+            start = {**search_start(c_h.fit), **held}
+            fo_p = dataclasses.replace(fo, start=start, start_from="the ridge point", search="polish")
+            c = _judged(name, common, trial, c_h.fit.parameters, fo_p,
+                        Scoring(pnames, bounds, trial.opt, trial.n_tried))
+            c = dataclasses.replace(c, held=", ".join(f"{k} = {v:.4g}" for k, v in held.items())
+                                    + " kept at the current model's value: the modes determine only a combination "
+                                      f"of it with {name}'s own parameters (a flat ridge of the fit)")
     if eff.kind == "coupling" and c.passes:
         missing = split_evidence(c, trial.opt)[1]
         if missing:
             return dataclasses.replace(c, passes=False, reason=missing)
     return c
+
+
+def on_ridge(res, name: str) -> bool:
+    """True when the fit ``res`` does not determine the free parameter ``name``: it takes part
+    in a direction of the log parameters along which the modes do not change (a null
+    vector of the Jacobian).
+
+    A rim on its fixture seen through one n = 1 mode is the case: the modes fix the rim's
+    frequency on the fixture, √(k_f / m_w) in effect, and any m_w fits as well with its k_f
+    (the χ² flat to 1e-12 over four decades). The Jacobian there is singular; its standard
+    errors from the pseudo-inverse are those of the determined directions only and say
+    nothing of the ridge. Null: a singular value below 1e-6 of the largest (the covariance's
+    pseudo-inverse cut-off, 1e-12 on JᵀJ; the central differences' error is ~1e-9 of the
+    largest), with the parameter's share of that singular vector above 0.1 (a 1 % part of
+    the direction's length squared; below that the direction is another parameter's).
+    """
+    if name not in res.free:
+        return False
+    J = np.asarray(res.jacobian, dtype=float)
+    if J.size == 0 or not np.all(np.isfinite(J)):
+        return False
+    _, sv, vt = np.linalg.svd(J, full_matrices=True)
+    sv = np.concatenate([sv, np.zeros(vt.shape[0] - sv.size)])
+    i = list(res.free).index(name)
+    null = sv < 1e-6 * sv.max() if sv.max() > 0 else np.ones(sv.size, bool)
+    return bool(np.any(np.abs(vt[null, i]) > 0.1))
 
 
 def split_evidence(c: Candidate, opt) -> tuple[list[dict], str | None]:
@@ -149,6 +194,8 @@ def adopt_reason(c: Candidate, runner: Candidate | None) -> str:
     what = "a parameter value is off" if c.kind == "parameter" else "missing physics"
     s = (f"adopted ({what}): RMS {c.rms_error_pct:.3f} %, ΔAICc {c.delta_aicc:+.1f}, F-test p = {c.f_p_value:.2g}, "
          + ", ".join(f"{k} = {v['value']:.4g} ± {v['std_error']:.2g}" for k, v in c.parameters.items()))
+    if c.held:
+        s += f"; {c.held}"
     if c.brought_back:
         s += "; brings back " + ", ".join(f"n = {b['n']} {b['branch']} at {b['frequency_hz']:.1f} Hz"
                                           for b in c.brought_back)

@@ -138,9 +138,16 @@ def try_cavity(name, spec: CavitySpec, trial: Trial, common: dict) -> Candidate:
     missing = (None if abs(cav_err["error_pct"]) <= 3 * opt.noise_floor_pct else
                f"the model's cavity mode misses the measured one by {cav_err['error_pct']:+.2f} %")
     fields, why = judge(restrict(cand_all, len(data)), cur_on, list(data),
-                        Scoring(tuple(spec.pnames), spec.bounds, opt, trial.n_tried),
+                        Scoring(tuple(spec.pnames), spec.bounds, opt, trial.n_tried,
+                                may_vanish=tuple(p for p in spec.pnames if p.endswith(".gamma"))),
                         missing_evidence=missing, extra_point=(e0, e1))
     fields["fit"] = cand_all
+    g = next((p for p in spec.pnames if p.endswith(".gamma")), None)
+    if g is not None and g in fields["parameters"]:
+        lo_g, hi_g = spec.bounds[g][:2]
+        if fields["parameters"][g]["value"] <= max(lo_g * 1.001, 1e-6 * hi_g):
+            fields["held"] = (f"{g} vanishes: no n = 1 structural mode near the cavity's shows its coupling, "
+                              "which the frequencies therefore do not determine; the cavity is identified by its mode")
     cavity_mode = {"frequency_hz": cav["frequency_hz"], "n": 1, "model_hz": cav_err["model_hz"],
                    "displaced": cav["displaced"], "band_hz": [lo, hi]}
     back = tuple(a.to_dict() for a in current.set_aside if a.mode in set(kept_struct))

@@ -35,6 +35,10 @@ class Scoring:
     bounds: dict
     opt: DiagnoseOptions
     n_tried: int
+    #: parameters that may vanish without refusing the candidate: a coupling the
+    #: frequencies cannot see, where the candidate has evidence of its own (the air
+    #: cavity's γ when no n = 1 structural mode lies near the cavity's: its mode is the evidence)
+    may_vanish: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -95,7 +99,10 @@ def judge(cand_fit: FitResult, current: FitResult, modes, scoring: Scoring, *, m
         lo, hi, hard = (*bounds[nm], False)[:3]
         v = params[nm]["value"]
         # a lower bound of 0 is reached as a vanishing value (the search is in log parameters)
-        if v <= max(lo * 1.001, 1e-6 * hi) or (v >= hi * 0.999 and not hard):
+        vanishing = v <= max(lo * 1.001, 1e-6 * hi)
+        if vanishing and nm in scoring.may_vanish:
+            continue
+        if vanishing or (v >= hi * 0.999 and not hard):
             return fields, f"{nm} = {v:.4g} sits at a limit of its search range [{lo:.3g}, {hi:.3g}]"
     return fields, None
 

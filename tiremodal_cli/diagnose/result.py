@@ -49,6 +49,9 @@ class Candidate:
     bounds: dict = field(default_factory=dict, repr=False)
     #: every test passed (adoptable); ``reason`` then says why it was or was not adopted
     passes: bool = False
+    #: base parameters the candidate frees but its fit cannot determine (:func:`on_ridge`),
+    #: held at the current model's values, and why; None when none
+    held: str | None = None
 
 
 
@@ -169,7 +172,8 @@ def _report(diag, n_max):
     cands = [{"name": c.name, "kind": c.kind, "title": c.title, "round": c.round,
               "score": c.delta_aicc, "aicc": c.aicc, "f_p_value": c.f_p_value,
               "rms_error_pct": c.rms_error_pct, "parameters": c.parameters, "adopted": c.adopted,
-              "reason": c.reason, "signature": c.signature, "brings_back": list(c.brought_back)}
+              "reason": c.reason, "signature": c.signature, "brings_back": list(c.brought_back),
+              "held": c.held}
              for c in diag.candidates]
     return {
         "verdict": diag.verdict,

@@ -179,9 +179,12 @@ def robust_fit(modes, base: TyreParameters, opt: FitOptions, *, alpha: float = 0
             break
         out = new_out
         kept = [i for i in range(N) if i not in out]
-        # one mode more or less moves the optimum a little: least squares from it
+        # one mode more or less moves the optimum a little: least squares from it; the full
+        # search ("global") searches again from it (a gross outlier set aside can move the
+        # optimum to another basin, which a polish from the old one never reaches)
         res = fit([modes[i] for i in kept], res.parameters,
-                  dataclasses.replace(opt, search="polish", start=_start_of(res)))
+                  dataclasses.replace(opt, search="global" if opt.search == "global" else "polish",
+                                      start=_start_of(res)))
     fm, z = normalised_errors(res, modes)
     med, s = _center_scale(z)
     s = s if scale is None else scale
