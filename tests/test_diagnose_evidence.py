@@ -118,3 +118,25 @@ def test_the_cavity_gets_a_round_of_its_own_past_max_effects():
     assert d.adopted == ("sidewall_membrane", "air_cavity")
     assert [c.name for c in d.candidates if c.round == 2] == ["air_cavity"]
     assert abs(d.cavity_modes[0]["frequency_hz"] / f_cav - 1) < 1e-9
+
+
+def test_a_rim_mass_on_a_flat_ridge_stays_where_the_current_model_has_it():
+    """With only the rim mode among the n = 1 modes, the rim mode's frequency fixes
+    √(k_f / m_w)-like combinations only (the profile above): whatever path a search takes
+    along that ridge, the adopted fit keeps m_w at the current model's value (the 1,000 kg
+    given) and says so; with the tread's n = 1 modes it is determined (60 kg) and not held."""
+    p = TyreParameters(m_w=60.0)
+    eff = {"rim_fixture": {"k_f": 1.0e6}}
+    f_rim = float(model_frequencies(p, [1], ["same"], eff, meas_hz=[5.0])[0])
+    rim_row = {"frequency_hz": f_rim, "n": 1, "branch": "same"}
+    opt = DiagnoseOptions(candidates=("rim_fixture",), rim="free", max_effects=1)
+    only = diagnose(_rows(p, eff, keep=lambda n, b: n != 1) + [rim_row], TyreParameters(m_w=1000.0), opt)
+    rim = next(c for c in only.candidates if c.name == "rim_fixture")
+    assert rim.held is not None and rim.held.startswith("m_w = 1000")
+    assert abs(only.augmented.parameters.m_w / 1000.0 - 1) < 1e-6
+    # the rim's frequency on its supports is what the modes fix: the model's rim mode there
+    f_model = float(model_frequencies(only.augmented.parameters, [1], ["same"], only.augmented.effects,
+                                      meas_hz=[f_rim])[0])
+    assert abs(f_model / f_rim - 1) < 1e-4
+    full = diagnose(_rows(p, eff) + [rim_row], TyreParameters(m_w=1000.0), opt)
+    assert next(c for c in full.candidates if c.name == "rim_fixture").held is None

@@ -147,3 +147,27 @@ def test_tangential_effect_is_the_ring_with_a_tangential_belt():
     low = np.array([k[0] == 1 for k in keys])
     assert np.max(np.abs(f_seed / f_ring - 1)) > 0.1
     assert np.max(err[~low]) < 5e-4 and np.max(err[low]) < 3e-3
+
+
+def test_a_search_ends_on_a_vanishing_bound_only_where_it_fits_as_well():
+    """Two parameters: the first's lower bound is where the objective is lowest (flat there
+    within rounding: a coupling that vanishes), the second's lower bound costs. The end moves
+    onto the first bound and leaves the second where it was."""
+    import numpy as np
+
+    from tiremodal_cli.tyre.fit import _to_vanishing_bounds
+
+    logb = np.log(np.array([[1e-12, 1.0], [1e-3, 1e3]]))
+
+    def objective_batch(X):  # (2, S) → (S,): x0's effect ∝ e^{x0} (vanishes), x1's minimum at 1
+        return np.sqrt(1.0 + 1e-3 * np.exp(X[0]) ** 2 + (X[1] - 0.0) ** 2)
+
+    x = np.array([np.log(1e-7), 0.0])
+    x1, f1 = _to_vanishing_bounds(objective_batch, x, logb)
+    assert x1[0] == logb[0, 0] and x1[1] == 0.0 and f1 <= objective_batch(x[:, None])[0]
+    def needs_it(X):  # x0's optimum at 0.5: removing it costs
+        return np.sqrt(1.0 + 1e-3 * (np.exp(X[0]) - 0.5) ** 2 + X[1] ** 2)
+
+    x = np.array([np.log(0.5), 0.0])
+    x2, f2 = _to_vanishing_bounds(needs_it, x, logb)
+    assert np.array_equal(x2, x) and f2 == needs_it(x[:, None])[0]
