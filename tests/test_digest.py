@@ -13,8 +13,14 @@ in its own commit that says why::
 
     python tests/test_digest.py --write
 
-Tolerances: 1e-6 relative on numbers (a different BLAS or CPU changes the last digits
-of an optimiser's answer, not the sixth), 1e-5 on the sums of single-precision arrays.
+Tolerances: 1e-5 relative on numbers and on the sums of single-precision arrays (a
+different BLAS or CPU changes the last digits of an optimiser's answer, and more of an
+ill-conditioned one: the standard error of a parameter the modes hardly determine moved by
+2.8e-6 between two machines of the same kind). Left out besides (``MACHINE_NOISE``): a
+cluster's representative order (the member nearest the cluster's median, an argmin among
+members whose scores tie to ~1e-13) and the rejected poles (poles near the noise, which
+the stabilization drops: their frequencies moved by up to 0.3 % and their damping by 27 %
+between those two machines).
 """
 
 from __future__ import annotations
@@ -36,6 +42,8 @@ DIGEST = ROOT / "tests" / "data" / "sample_run_digest.json"
 VOLATILE = {"seconds", "provenance", "created_utc", "created", "tiremodal_version", "version", "git_commit",
             "command", "python", "numpy", "scipy", "platform", "input_file", "measurement", "path",
             "input_sha256", "sha256", "outputs", "host", "user"}
+#: values that move with the machine's floating point (module docstring)
+MACHINE_NOISE = {"representative_order", "rejected"}
 
 
 def _leaves(obj, prefix=""):
@@ -43,7 +51,7 @@ def _leaves(obj, prefix=""):
     out = {}
     if isinstance(obj, dict):
         for k, v in obj.items():
-            if k not in VOLATILE:
+            if k not in VOLATILE | MACHINE_NOISE:
                 out.update(_leaves(v, f"{prefix}/{k}"))
     elif isinstance(obj, list):
         for i, v in enumerate(obj):
@@ -58,7 +66,7 @@ def _h5_digest(path):
 
     def attrs(name, obj):
         for k, v in obj.attrs.items():
-            if k in VOLATILE:
+            if k in VOLATILE | MACHINE_NOISE:
                 continue
             v = v.decode() if isinstance(v, bytes) else v
             v = v.tolist() if isinstance(v, np.ndarray) else v.item() if isinstance(v, np.generic) else v
@@ -113,6 +121,15 @@ def _sample_run(outdir):
     return digest(outdir)
 
 
+def _drop_noise(obj):
+    """A JSON value without its :data:`MACHINE_NOISE` keys, at any depth."""
+    if isinstance(obj, dict):
+        return {k: _drop_noise(v) for k, v in obj.items() if k not in MACHINE_NOISE}
+    if isinstance(obj, list):
+        return [_drop_noise(v) for v in obj]
+    return obj
+
+
 def _close(a, b, rtol):
     if isinstance(a, bool) or isinstance(b, bool) or a is None or b is None:
         return a == b
@@ -125,7 +142,8 @@ def _close(a, b, rtol):
             return True
         if a[:1] in "{[" and b[:1] in "{[":  # a JSON attribute: its numbers to the same tolerance
             try:
-                return _close(json.loads(a), json.loads(b), rtol)
+                ja, jb = _drop_noise(json.loads(a)), _drop_noise(json.loads(b))
+                return _close(ja, jb, rtol)
             except ValueError:
                 return a == b
         try:
@@ -144,7 +162,7 @@ def differences(got: dict, want: dict) -> list[str]:
     out = []
     for f in sorted(set(got) | set(want)):
         g, w = got.get(f, {}), want.get(f, {})
-        rtol = 1e-5 if f.endswith(".h5") else 1e-6
+        rtol = 1e-5
         for k in sorted(set(g) | set(w)):
             if k not in g or k not in w:
                 out.append(f"{f} {k}: {'missing now' if k not in g else 'new'}")

@@ -104,9 +104,12 @@ def _try_effect(name: str, trial: Trial) -> Candidate:
             fo_p = dataclasses.replace(fo, start=start, start_from="the ridge point", search="polish")
             c = _judged(name, common, trial, c_h.fit.parameters, fo_p,
                         Scoring(pnames, bounds, trial.opt, trial.n_tried))
-            c = dataclasses.replace(c, held=", ".join(f"{k} = {v:.4g}" for k, v in held.items())
-                                    + " kept at the current model's value: the modes determine only a combination "
-                                      f"of it with {name}'s own parameters (a flat ridge of the fit)")
+            stayed = c.fit is not None and all(abs(float(getattr(c.fit.parameters, k)) / v - 1) < 1e-6
+                                               for k, v in held.items())
+            if stayed:  # (else the polish found a slope: no ridge there, and nothing to say)
+                c = dataclasses.replace(c, held=", ".join(f"{k} = {v:.4g}" for k, v in held.items())
+                                        + " kept at the current model's value: the modes determine only a "
+                                          f"combination of it with {name}'s own parameters (a flat ridge of the fit)")
     if eff.kind == "coupling" and c.passes:
         missing = split_evidence(c, trial.opt)[1]
         if missing:
