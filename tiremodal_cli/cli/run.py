@@ -10,6 +10,7 @@ from tiremodal_cli.errors import OutputExistsError
 from tiremodal_cli.io.files import refuse_input_as_output
 from tiremodal_cli.io.frfuff import is_uff
 from tiremodal_cli.tyre.model import NOMINAL_RIM_KG
+from tiremodal_cli.workflow.pipeline import MODES_OUTPUTS, is_modes_table
 from tiremodal_cli.workflow.run_folder import run_folder
 from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions
 from tiremodal_cli.cli.main import cli
@@ -40,7 +41,10 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
 
     MEASUREMENT is a measurement file, or a UFF file of FRFs (dataset 58, function type 4,
     from another system): such a test starts at lsce, in SI from the file's units, its
-    points placed by the file's geometry (dataset 15) or by --mapping.
+    points placed by the file's geometry (dataset 15) or by --mapping; or a CSV of measured
+    modes (*.csv: frequency_hz, n, branch — the paper's Table A1, or lsce --csv): it starts
+    at identify, the rim and pressure from the parameters (writes modes.csv, identify.json,
+    diagnosis.json, sensitivity.json, run.json).
 
     Writes frf.h5, modal.h5, modes.csv, identify.json, diagnosis.json, sensitivity.json and,
     last, run.json (checksums and summary) into a private folder beside OUTDIR, installed
@@ -55,11 +59,14 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
     if effects:
         raise click.BadParameter("run finds the effects itself: a params file holds no [effects] here",
                                  param_hint="--params")
-    if "m_w" not in {p.split("=", 1)[0].strip() for p in param_items if "=" in p} and not params_file:
+    modes_table = is_modes_table(measurement)
+    if "m_w" not in {p.split("=", 1)[0].strip() for p in param_items if "=" in p} and not params_file \
+            and not modes_table:  # (a table of modes has no rim channel: the parameters' rim, as in diagnose)
         base = base.replace(m_w=NOMINAL_RIM_KG)
     opt = RunOptions(band=tuple(band) if band else None, exp_end=None if no_exp_window else exp_end, seed=seed,
                      noise_floor_pct=noise_floor_pct, max_effects=max_effects, pressure_from_file=not p0_from_params)
-    bar = StageProgress("run", ["read FRFs" if is_uff(measurement) else "frf", "lsce", "identify", "diagnose"])
+    bar = StageProgress("run", ["identify", "diagnose"] if modes_table else
+                        ["read FRFs" if is_uff(measurement) else "frf", "lsce", "identify", "diagnose"])
     try:
         summary = run_folder(measurement, outdir, opt, params=base, overwrite=overwrite, progress=bar,
                              mapping=mapping)
@@ -73,6 +80,8 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
         click.echo(f"{summary['measurement']}: UFF FRFs ({src['form']}, {src['unit_in_file']} × {src['to_si']:.6g} "
                    f"to SI, from {src['from']}; points from {src['geometry']}); started at lsce: "
                    f"{summary['modes_found']} modes")
+    elif summary.get("starts_at") == "identify":
+        click.echo(f"{summary['measurement']}: a table of {summary['modes_found']} modes; started at identify")
     else:
         rej = summary["rejected_hits"]  # (a channel without signal is listed with hit None: not a hit)
         dead = sorted({x["channel"] for x in rej if x["hit"] is None})
@@ -82,4 +91,4 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
     click.echo("identified: " + ", ".join(f"{k} = {v['value']:.5g} ± {v['std_error']:.2g}"
                                           for k, v in summary["identified"].items()))
     click.echo(f"diagnosis: {summary['verdict']}")
-    say(f"wrote {outdir}/: {', '.join(OUTPUTS)}, {MANIFEST}")
+    say(f"wrote {outdir}/: {', '.join(MODES_OUTPUTS if modes_table else OUTPUTS)}, {MANIFEST}")

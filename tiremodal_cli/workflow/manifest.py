@@ -15,7 +15,7 @@ from tiremodal_cli import __version__
 from tiremodal_cli.errors import DataFormatError
 from tiremodal_cli.io.files import sha256_file
 from tiremodal_cli.tyre.model import TyreParameters
-from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions, json_text
+from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions, json_text, required_outputs
 
 __all__ = ['provenance', 'files_sha256', 'read_manifest', 'verify_manifest', 'is_complete']
 
@@ -84,8 +84,9 @@ def verify_manifest(folder, man: dict | None = None) -> dict:
     if man is None:
         raise DataFormatError(f"{folder}: no readable run manifest ({MANIFEST}); run 'tiremodal run' first")
     outs = man.get("outputs") if isinstance(man, dict) else None
-    if not isinstance(outs, dict) or not set(OUTPUTS) <= set(outs):
-        raise DataFormatError(f"{folder / MANIFEST}: lists no checksums of {', '.join(OUTPUTS)}; "
+    need = required_outputs(man)
+    if not isinstance(outs, dict) or not set(need) <= set(outs):
+        raise DataFormatError(f"{folder / MANIFEST}: lists no checksums of {', '.join(need)}; "
                               "not a complete run folder")
     for name, h in outs.items():
         p = folder / name
@@ -100,13 +101,13 @@ def verify_manifest(folder, man: dict | None = None) -> dict:
 
 def is_complete(outdir, measurement=None, opt: RunOptions | None = None, *, input_sha256: str | None = None,
                 params: TyreParameters | None = None) -> bool:
-    """True when ``outdir`` holds a manifest whose outputs (all of :data:`OUTPUTS`) exist with
+    """True when ``outdir`` holds a manifest whose outputs (all of :func:`required_outputs`) exist with
     their checksums and, where given, whose input checksum (of ``measurement``, or
     ``input_sha256``), options and nominal parameters match."""
     outdir = Path(outdir)
     man = read_manifest(outdir)
     try:
-        if man is None or not set(OUTPUTS) <= set(man["outputs"]):
+        if man is None or not set(required_outputs(man)) <= set(man["outputs"]):
             return False
         if any(sha256_file(outdir / n) != h for n, h in man["outputs"].items()):
             return False

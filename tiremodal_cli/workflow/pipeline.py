@@ -28,7 +28,7 @@ from tiremodal_cli.io.frfuff import is_uff, read_frf_uff
 from tiremodal_cli.io.ingest import load_channel_map
 from tiremodal_cli.io.measurement import open_measurement
 from tiremodal_cli.io.modalfile import no_usable_modes
-from tiremodal_cli.io.modalfile import to_csv, write_modal
+from tiremodal_cli.io.modalfile import read_modal_csv, to_csv, write_modal
 from tiremodal_cli.modal.table import to_rows
 from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
 from tiremodal_cli.modal.spatial import grid_points
@@ -38,9 +38,9 @@ from tiremodal_cli.tyre.model import NOMINAL_RIM_KG, TyreParameters
 from tiremodal_cli.tyre.predict import fit_report, predict_table
 from tiremodal_cli.tyre.sensitivity import PAPER_STUDY, coefficients
 from tiremodal_cli.workflow.manifest import files_sha256, provenance
-from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions, json_text
+from tiremodal_cli.workflow.run_options import MANIFEST, MODES_OUTPUTS, OUTPUTS, RunOptions, json_text
 
-__all__ = ['run', 'rim_condition', 'rim_state', 'read_uff_test', 'thread_budget']
+__all__ = ['run', 'rim_condition', 'rim_state', 'read_uff_test', 'thread_budget', 'is_modes_table', 'MODES_OUTPUTS']
 
 
 def rim_condition(r, params: TyreParameters) -> tuple[TyreParameters, str]:
@@ -104,6 +104,8 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     outdir = Path(outdir)
     paths = [Path(p) for p in measurement] if isinstance(measurement, (list, tuple)) else [Path(measurement)]
     say = progress or (lambda stage: None)
+    if len(paths) == 1 and is_modes_table(paths[0]):
+        return _run_on_modes(paths[0], outdir, opt, params or TyreParameters(), source, say, t0)
     r, force_g, meta, sha = _frf_input(paths, opt, mapping, say)
     nominal = params or TyreParameters()
     params = nominal
@@ -129,6 +131,37 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     return summary
 
 
+def is_modes_table(path) -> bool:
+    """A CSV of measured modes (``*.csv``: frequency_hz, n, branch; the paper's Table A1 layout,
+    or ``lsce --csv``): ``run`` starts at identify on it."""
+    return Path(path).suffix.lower() == ".csv"
+
+
+def _run_on_modes(path: Path, outdir: Path, opt: RunOptions, params: TyreParameters, source, say, t0) -> dict:
+    """``run`` on a table of measured modes: identify and diagnose (and the paper's model
+    comparison), the modes copied as modes.csv. The rim is the parameters' (no rim channel:
+    clamped unless m_w is given), the pressure the parameters'; there are no point angles,
+    so no aliasing check (every n as the table gives it)."""
+    rows = read_modal_csv(path)
+    sha = sha256_file(path)
+    source = source or {"path": str(path), "kind": "modes-table", "sha256": sha}
+    how = "clamped" if params.m_w is None else f"free, m_w = {params.m_w:g} kg"
+    rim_how = f"{how}: from the parameters (the input is a table of modes, with no rim channel)"
+    write_text_atomic(outdir / "modes.csv", path.read_text(encoding="utf-8"), overwrite=True)
+    ident, rep = _model_stages(rows, params, rim_how, opt, source, outdir, say)
+    meta = {"tire": None, "inflation_pressure": None, "n_points": None, "n_hits": None, "sample_rate": None,
+            "starts_at": "identify"}
+    summary = {"measurement": str(source["path"]), **meta, "rim": rim_how, "rejected_hits": [],
+               "modes_found": len(rows), **_model_summary(ident, rep), "seconds": time.perf_counter() - t0}
+    names = list(MODES_OUTPUTS)
+    manifest = {"format": "tiremodal.run", "format_version": 1, **provenance(),
+                "input_file": str(source["path"]), "input_sha256": sha, "source": source, "options": opt.to_dict(),
+                "params": params.to_dict(), "model_P0": params.P0, "model_m_w": params.m_w,
+                "outputs": {name: sha256_file(outdir / name) for name in names}, "summary": summary}
+    write_text_atomic(outdir / MANIFEST, json_text(manifest), overwrite=True)
+    return summary
+
+
 def _model_stages(table, params: TyreParameters, rim_how: str, opt: RunOptions, source: dict, outdir: Path, say):
     """identify and diagnose on the modal table, writing identify.json, diagnosis.json and
     sensitivity.json; returns identify.json's and diagnosis.json's content.
@@ -138,14 +171,16 @@ def _model_stages(table, params: TyreParameters, rim_how: str, opt: RunOptions, 
     say("identify")
     dopt = DiagnoseOptions(seed=opt.seed, noise_floor_pct=opt.noise_floor_pct, max_effects=opt.max_effects,
                            rim=rim_state(rim_how))
-    rows = to_rows(table)
-    measured = usable_modes(rows, dopt, source="modal.h5", on_empty=lambda: no_usable_modes(
+    rows = table if isinstance(table, list) else to_rows(table)
+    what = "modes.csv" if isinstance(table, list) else "modal.h5"
+    measured = usable_modes(rows, dopt, source=what, on_empty=lambda: no_usable_modes(
         f"{source['path']} (its modal table)", rows, modes_from_rows(rows)[1]))
     base = base_fit(measured.modes, params, dopt)
     ident, n_pred = _identify_report(base, measured, params, opt)
     write_text_atomic(outdir / "identify.json", json_text(ident), overwrite=True)
     say("diagnose")
-    diag = diagnose(measured, params, dopt, n_points=grid_points(table.point_angle), base=base)
+    diag = diagnose(measured, params, dopt, n_points=None if isinstance(table, list) else grid_points(table.point_angle),
+                    base=base)
     rep = report(diag, n_pred)
     write_text_atomic(outdir / "diagnosis.json", json_text(rep), overwrite=True)
     write_text_atomic(outdir / "sensitivity.json", json_text(_sensitivity(diag.augmented, n_pred)), overwrite=True)
@@ -203,15 +238,18 @@ def _summary(source, meta, rim_how, r, table, ident, rep, seconds) -> dict:
     return {
         "measurement": str(source["path"]), **meta, "rim": rim_how,
         "rejected_hits": [x.to_dict() for x in r.rejections],
-        "modes_found": int(table.n_modes),
-        "identified": ident["parameters"], "rms_error_pct": ident["rms_error_pct"],
-        "set_aside_modes": ident["set_aside"],
-        "adopted_effects": rep["adopted_effects"], "parameter_off": rep["parameter_off"],
-        "rms_before_pct": rep["base"]["rms_error_pct"], "rms_after_pct": rep["augmented"]["rms_error_pct"],
-        "augmented_parameters": rep["augmented"]["parameters"],
-        "unexplained_modes": rep["unexplained_modes"], "verdict": rep["verdict"],
-        "seconds": seconds,
+        "modes_found": int(table.n_modes), **_model_summary(ident, rep), "seconds": seconds,
     }
+
+
+def _model_summary(ident: dict, rep: dict) -> dict:
+    """The summary's fields of identify and diagnose."""
+    return {"identified": ident["parameters"], "rms_error_pct": ident["rms_error_pct"],
+            "set_aside_modes": ident["set_aside"],
+            "adopted_effects": rep["adopted_effects"], "parameter_off": rep["parameter_off"],
+            "rms_before_pct": rep["base"]["rms_error_pct"], "rms_after_pct": rep["augmented"]["rms_error_pct"],
+            "augmented_parameters": rep["augmented"]["parameters"],
+            "unexplained_modes": rep["unexplained_modes"], "verdict": rep["verdict"]}
 
 
 def _force_autospectrum(m, freq_hz):

@@ -58,10 +58,11 @@ def _load_json(path: Path) -> dict:
 
 
 def _figures(folder: Path, man: dict, ident: dict, diag: dict, sens: dict) -> dict[str, Callable]:
-    """Callables making each figure of :data:`FIGURES` from the run folder's outputs."""
-    r = read_frf(folder / "frf.h5")
-    table = read_modal(folder / "modal.h5")
-    n_p = r.point_angle.size
+    """Callables making each figure of :data:`FIGURES` from the run folder's outputs (a run
+    that started at identify, on a table of modes, has no FRF or modal figures)."""
+    from_modes = man.get("summary", {}).get("starts_at") == "identify"
+    r = None if from_modes else read_frf(folder / "frf.h5")
+    table = None if from_modes else read_modal(folder / "modal.h5")
 
     def fit():
         ax = plots.plot_dispersion(ident["predictions"], measured=ident["modes"])
@@ -81,18 +82,24 @@ def _figures(folder: Path, man: dict, ident: dict, diag: dict, sens: dict) -> di
         return plots.plot_sensitivity([row["n"] for row in c], [row["branch"] for row in c], S,
                                       sens["names"])[0].figure
 
-    return {
-        "frf": lambda: plots.plot_frf(r, points=sorted({0, n_p // 4}))[0].figure,
-        "stabilization": lambda: plots.stabilization_figure(table, r),
-        "mac": lambda: plots.automac_figure(table),
-        "shapes": lambda: plots.plot_shapes(table),
-        "synthesis": lambda: plots.synthesis_figure(table, r),
+    model = {
         "fit": fit,
         "convergence": lambda: plots.plot_convergence([(h["generation"], h["rms_error_pct"] / 100)
                                                        for h in ident["history"]]).figure,
         "residuals": lambda: plots.plot_residuals(diag["modes"]),
         "predictions": predictions,
         "sensitivity": sensitivity,
+    }
+    if from_modes:
+        return model
+    n_p = r.point_angle.size
+    return {
+        "frf": lambda: plots.plot_frf(r, points=sorted({0, n_p // 4}))[0].figure,
+        "stabilization": lambda: plots.stabilization_figure(table, r),
+        "mac": lambda: plots.automac_figure(table),
+        "shapes": lambda: plots.plot_shapes(table),
+        "synthesis": lambda: plots.synthesis_figure(table, r),
+        **model,
     }
 
 
@@ -114,6 +121,8 @@ def report_run(folder, *, progress: Callable[[str], None] | None = None) -> Path
     try:
         pngs = {}
         for stem, _ in FIGURES:
+            if stem not in makers:
+                continue
             if progress:
                 progress(stem)
             pngs[stem] = render(makers[stem](), tmp, stem)
@@ -133,6 +142,8 @@ def _mode_gifs(folder: Path, figdir: Path) -> list[tuple[str, bytes]]:
     """Each mode moving (tread, sidewall and rim rings in the tyre's plane), as GIFs: written
     to ``figures/modes/mode_NN.gif`` and returned as (caption, bytes) for the page
     (about 40 kB a mode: a 34-mode report stays well under 10 MB)."""
+    if not (folder / "modal.h5").is_file():  # (a run on a table of modes: no shapes)
+        return []
     table = read_modal(folder / "modal.h5")
     if table.n_modes == 0 or "tread" not in table.channel_location:
         return []

@@ -13,7 +13,7 @@ from tiremodal_cli.errors import DataFormatError, ParameterError
 from tiremodal_cli.io.files import UMASK, check_writable, install_dir, path_lock, refuse_input_as_output, sha256_file
 from tiremodal_cli.io.frfuff import is_uff
 from tiremodal_cli.tyre.model import TyreParameters
-from tiremodal_cli.workflow.pipeline import run
+from tiremodal_cli.workflow.pipeline import is_modes_table, run
 from tiremodal_cli.workflow.run_options import MANIFEST, OUTPUTS, RunOptions
 
 __all__ = ['run_folder']
@@ -81,7 +81,7 @@ def run_folder(measurement, outdir, opt: RunOptions = RunOptions(), *, params: T
         try:
             meas = _carry_over(outdir, tmp, measurement)
             sha = sha256_file(measurement)
-            kind = "uff-frf" if is_uff(measurement) else "measurement"
+            kind = "uff-frf" if is_uff(measurement) else "modes-table" if is_modes_table(measurement) else "measurement"
             summary = run(meas, tmp, opt, params=params, progress=progress, mapping=mapping,
                           source={"path": str(measurement), "kind": kind, "sha256": sha})
             install_dir(tmp, outdir, aside=parent)

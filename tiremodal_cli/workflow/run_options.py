@@ -10,10 +10,19 @@ from tiremodal_cli.conventions import FRF_FORMS
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.io.files import dumps
 
-__all__ = ['OUTPUTS', 'MANIFEST', 'RunOptions', 'json_text']
+__all__ = ['OUTPUTS', 'MODES_OUTPUTS', 'MANIFEST', 'RunOptions', 'json_text', 'required_outputs']
 
 
 OUTPUTS = ("frf.h5", "modal.h5", "modes.csv", "identify.json", "diagnosis.json", "sensitivity.json")
+#: what ``run`` writes for a table of measured modes (it starts at identify: no records, no frf.h5, no modal.h5)
+MODES_OUTPUTS = ("modes.csv", "identify.json", "diagnosis.json", "sensitivity.json")
+
+
+def required_outputs(man: dict) -> tuple[str, ...]:
+    """The outputs a run folder's manifest must list: :data:`MODES_OUTPUTS` for a run that
+    started at identify (a table of modes), else :data:`OUTPUTS`."""
+    s = man.get("summary") if isinstance(man, dict) else None
+    return MODES_OUTPUTS if isinstance(s, dict) and s.get("starts_at") == "identify" else OUTPUTS
 
 
 MANIFEST = "run.json"

@@ -104,6 +104,10 @@ def _head(p: _RunPage) -> list[str]:
     s = p.summary
     out = [f"<h1>Modal test report — {escape(Path(s['measurement']).name)}</h1>",
            f"<p><b>Diagnosis:</b> {escape(_in_words(s['verdict']))}</p>"]
+    if s.get("starts_at") == "identify":
+        out.append("<p><b>Input:</b> a table of measured modes (frequency, circumferential order n, "
+                   "branch): the pipeline started at identify. There were no records, so no FRFs, no modal "
+                   "estimate and no shapes here; the rim and the pressure are the parameters'.</p>")
     if s.get("starts_at") == "lsce":
         out.append("<p><b>Input:</b> FRFs from another system (UFF 58): the pipeline started at lsce. "
                    "There were no time records, so no hit checks, no windows and no force spectrum here; "
@@ -121,17 +125,22 @@ def _test_section(p: _RunPage) -> list[str]:
                       [("point", "point"), ("hit", "hit"), ("channel", "channel"), ("reason", "reason")],
                       left=("channel", "reason")) if rej else
                "<p>Not checked: the input holds FRFs, not hits.</p>" if s.get("starts_at") == "lsce" else
+               "<p>Not checked: the input is a table of modes, not hits.</p>" if s.get("starts_at") == "identify" else
                "<p>None: every hit passed the checks.</p>")
     return out
 
 
 def _modes_section(p: _RunPage) -> list[str]:
-    out = ["<h2>FRFs and coherence</h2>", p.fig("frf"), "<h2>Stabilization diagram</h2>", p.fig("stabilization")]
-    out += ["<h2>Modal table</h2>", table(_modes_rows(p.folder),
+    from_modes = p.summary.get("starts_at") == "identify"
+    out = [] if from_modes else ["<h2>FRFs and coherence</h2>", p.fig("frf"), "<h2>Stabilization diagram</h2>",
+                                 p.fig("stabilization")]
+    out += ["<h2>Modal table" + (" (as given)" if from_modes else "") + "</h2>", table(_modes_rows(p.folder),
                                            [("mode", "mode"), ("frequency_hz", "f [Hz]"), ("damping_pct", "ζ [%]"),
                                             ("n", "n"), ("branch", "branch"), ("n_confidence", "n conf."),
                                             ("mpc", "MPC"), ("frequency_uncertainty_hz", "σf [Hz]")],
                                            left=("branch",))]
+    if from_modes:
+        return out
     out += ["<h2>MAC matrix</h2>", p.fig("mac"), "<h2>Mode shapes</h2>", p.fig("shapes")]
     if p.gifs:
         out += ["<h3>The modes moving</h3>",
@@ -248,6 +257,8 @@ def _test_facts(man: dict) -> list[tuple[str, object]]:
             facts.append(("options not used", src["options_not_used"]))
         if src.get("header"):
             facts.append(("file header (UFF 151)", "; ".join(f"{k}: {v}" for k, v in src["header"].items() if v)))
+    elif s.get("starts_at") == "identify":
+        facts += [("input", "a table of measured modes; the pipeline started at identify")]
     else:
         facts += [("impact points × hits", f"{s['n_points']} × {s['n_hits']}"),
                   ("sample rate", f"{s['sample_rate']:g} Hz")]
@@ -279,13 +290,14 @@ def _modes_rows(folder: Path) -> list[dict]:
     """The modal table (``modes.csv``) as rows for the page."""
     rows = read_modal_csv(folder / "modes.csv")
     out = []
-    for r in rows:
+    for i, r in enumerate(rows):
         def f(k):
             try:
                 return float(r[k]) if r.get(k) not in (None, "") else None
             except ValueError:
                 return None
-        out.append({"mode": int(r["mode"]), "frequency_hz": f("frequency_hz"),
+        out.append({"mode": int(r["mode"]) if r.get("mode") not in (None, "") else i + 1,
+                    "frequency_hz": f("frequency_hz"),
                     "damping_pct": None if f("damping_ratio") is None else 100 * f("damping_ratio"),
                     "n": None if r.get("n") in (None, "") else int(r["n"]), "branch": r.get("branch", ""),
                     "n_confidence": f("n_confidence"), "mpc": f("mpc"),
