@@ -140,3 +140,20 @@ def test_a_rim_mass_on_a_flat_ridge_stays_where_the_current_model_has_it():
     assert abs(f_model / f_rim - 1) < 1e-4
     full = diagnose(_rows(p, eff) + [rim_row], TyreParameters(m_w=1000.0), opt)
     assert next(c for c in full.candidates if c.name == "rim_fixture").held is None
+
+
+def test_two_effects_are_both_adopted_whichever_comes_first():
+    """Two effects on one tyre are separable: a sidewall membrane (∝ n²) and a stretching
+    belt (n = 0) are both adopted when the membrane is the stronger (it comes first) and
+    when it is the weaker (the belt comes first), and so are tangential coupling and the
+    belt; the order the candidates are listed in changes nothing."""
+    p = TyreParameters()
+    cases = [({"sidewall_membrane": {"T_s": 2.0e4}, "extensible_belt": {"EA": 2.0e6}}, "sidewall_membrane"),
+             ({"sidewall_membrane": {"T_s": 2.0e3}, "extensible_belt": {"EA": 5.0e5}}, "extensible_belt"),
+             ({"tangential": {"c_t": 0.5, "k_t": 1.0e6}, "extensible_belt": {"EA": 1.0e6}}, "tangential")]
+    for eff, first in cases:
+        rows = _rows(p, eff)
+        for order in (tuple(eff), tuple(eff)[::-1]):
+            d = diagnose(rows, p, DiagnoseOptions(candidates=order, max_effects=2))
+            assert set(d.adopted) == set(eff) and d.adopted[0] == first, (eff, order, d.adopted)
+            assert d.augmented.rms_error_pct < 0.01
