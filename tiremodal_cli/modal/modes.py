@@ -361,6 +361,12 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
     -------
     table : ModalTable ; result : ModalResult
     """
+    order = _angle_order(r.point_angle)
+    if order is not None:  # every estimate in the order of the angles: the same modes however stored
+        table, res = modal_table_from_frf(_points_taken(r, order), opt, progress=progress,
+                                          force_autospectrum=force_autospectrum)
+        inv = np.argsort(order)
+        return _table_points_taken(table, inv), _result_points_taken(res, inv)
     if opt.band_hz is None:
         band, why = default_band(r.freq_hz, r.coherence, r.n_averages, force_autospectrum)
         opt = replace(opt, band_hz=band)
@@ -394,3 +400,35 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
                               channel_name=r.channel_name, channel_location=r.channel_location,
                               channel_angle=r.channel_angle, form=r.form)
     return table, res
+
+
+def _angle_order(point_angle) -> np.ndarray | None:
+    """The points' order by angle in [0, 2π) (stable), or None when they are stored so.
+
+    The estimate is a sum over the points (the spatial transform, the principal responses,
+    the sweeps' normal matrices): stored in another order — from point 11 on, or in
+    decreasing angle — its floating-point sums differ in the last digits, and a mode at a
+    threshold's edge (a significance, a crowd's order confidence) can fall either way. Taken
+    in the order of the angles, every storage gives the same numbers to the bit."""
+    a = np.mod(np.asarray(point_angle, dtype=float), 2 * np.pi)
+    if a.size < 2 or not np.all(np.isfinite(a)):
+        return None
+    order = np.argsort(a, kind="stable")
+    return None if np.array_equal(order, np.arange(a.size)) else order
+
+
+def _points_taken(r, idx):
+    """The FRFResult ``r`` with its points taken in the order ``idx``."""
+    return dataclasses.replace(r, H=r.H[:, idx], coherence=r.coherence[:, idx], n_averages=r.n_averages[idx],
+                               point_index=r.point_index[idx], point_angle=r.point_angle[idx])
+
+
+def _result_points_taken(res, idx):
+    return dataclasses.replace(res, shapes=res.shapes[:, :, idx], fit_error=res.fit_error[:, idx],
+                               synthesis=res.synthesis[:, idx])
+
+
+def _table_points_taken(t, idx):
+    return dataclasses.replace(t, shapes=t.shapes[:, :, idx], fit_error=t.fit_error[:, idx],
+                               point_angle=t.point_angle[idx], point_index=t.point_index[idx],
+                               synthesis=None if t.synthesis is None else t.synthesis[:, idx])
