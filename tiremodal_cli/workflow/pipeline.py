@@ -122,13 +122,25 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
         raise DataFormatError(f"{source['path']}: {exc}") from None
     ident, rep = _model_stages(table, params, rim_how, opt, source, outdir, say)
     summary = _summary(source, meta, rim_how, r, table, ident, rep, time.perf_counter() - t0)
-    names = list(OUTPUTS) + ([paths[0].name] if paths[0].parent.resolve() == outdir.resolve() else [])
+    _write_manifest(outdir, list(OUTPUTS) + _input_inside(paths[0], outdir), source, sha, opt, nominal, params,
+                    summary)
+    return summary
+
+
+def _input_inside(path: Path, outdir: Path) -> list[str]:
+    """The input's name when it lies in the output folder (its checksum is then kept too)."""
+    return [path.name] if path.parent.resolve() == outdir.resolve() else []
+
+
+def _write_manifest(outdir: Path, names, source: dict, sha: str, opt: RunOptions, nominal: TyreParameters,
+                    params: TyreParameters, summary: dict) -> None:
+    """run.json, last: the input and source checksums, options, nominal parameters and the
+    P0 and rim used, each output's checksum (``names``), the summary."""
     manifest = {"format": "tiremodal.run", "format_version": 1, **provenance(),
                 "input_file": str(source["path"]), "input_sha256": sha, "source": source, "options": opt.to_dict(),
                 "params": nominal.to_dict(), "model_P0": params.P0, "model_m_w": params.m_w,
                 "outputs": {name: sha256_file(outdir / name) for name in names}, "summary": summary}
     write_text_atomic(outdir / MANIFEST, json_text(manifest), overwrite=True)
-    return summary
 
 
 def is_modes_table(path) -> bool:
@@ -153,12 +165,8 @@ def _run_on_modes(path: Path, outdir: Path, opt: RunOptions, params: TyreParamet
             "starts_at": "identify"}
     summary = {"measurement": str(source["path"]), **meta, "rim": rim_how, "rejected_hits": [],
                "modes_found": len(rows), **_model_summary(ident, rep), "seconds": time.perf_counter() - t0}
-    names = list(MODES_OUTPUTS)
-    manifest = {"format": "tiremodal.run", "format_version": 1, **provenance(),
-                "input_file": str(source["path"]), "input_sha256": sha, "source": source, "options": opt.to_dict(),
-                "params": params.to_dict(), "model_P0": params.P0, "model_m_w": params.m_w,
-                "outputs": {name: sha256_file(outdir / name) for name in names}, "summary": summary}
-    write_text_atomic(outdir / MANIFEST, json_text(manifest), overwrite=True)
+    _write_manifest(outdir, list(MODES_OUTPUTS) + _input_inside(path, outdir), source, sha, opt, params, params,
+                    summary)
     return summary
 
 
