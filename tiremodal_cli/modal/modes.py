@@ -21,6 +21,7 @@ from tiremodal_cli.frf.windows import correct_poles
 from tiremodal_cli.modal.band import band_or_every_line, default_band, no_stable_mode, order_for_lines
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
+from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
 from tiremodal_cli.modal.lsfd import mpc
 from tiremodal_cli.modal.merge import GroupMode, leak_copies, merge_groups, off_edges, swap_cost
@@ -354,19 +355,16 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
     points go round a tread.
 
     Without ``opt.band_hz`` the band is :func:`default_band` of the FRFs' coherence (and
-    ``force_autospectrum``, (n_freq,) on ``r.freq_hz``, when given); its reason is in
-    ``table.meta["band_reason"]``.
+    ``force_autospectrum``, (n_freq,) on ``r.freq_hz``); its reason in ``meta["band_reason"]``.
 
     Returns
     -------
     table : ModalTable ; result : ModalResult
     """
-    order = _angle_order(r.point_angle)
-    if order is not None:  # every estimate in the order of the angles: the same modes however stored
-        table, res = modal_table_from_frf(_points_taken(r, order), opt, progress=progress,
-                                          force_autospectrum=force_autospectrum)
-        inv = np.argsort(order)
-        return _table_points_taken(table, inv), _result_points_taken(res, inv)
+    order = angle_order(r.point_angle)
+    if order is not None:  # every estimate in the order of the angles (point_order): the same however stored
+        return stored_order(modal_table_from_frf(frf_points_taken(r, order), opt, progress=progress,
+                                                 force_autospectrum=force_autospectrum), order)
     if opt.band_hz is None:
         band, why = default_band(r.freq_hz, r.coherence, r.n_averages, force_autospectrum)
         opt = replace(opt, band_hz=band)
@@ -400,35 +398,3 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
                               channel_name=r.channel_name, channel_location=r.channel_location,
                               channel_angle=r.channel_angle, form=r.form)
     return table, res
-
-
-def _angle_order(point_angle) -> np.ndarray | None:
-    """The points' order by angle in [0, 2π) (stable), or None when they are stored so.
-
-    The estimate is a sum over the points (the spatial transform, the principal responses,
-    the sweeps' normal matrices): stored in another order — from point 11 on, or in
-    decreasing angle — its floating-point sums differ in the last digits, and a mode at a
-    threshold's edge (a significance, a crowd's order confidence) can fall either way. Taken
-    in the order of the angles, every storage gives the same numbers to the bit."""
-    a = np.mod(np.asarray(point_angle, dtype=float), 2 * np.pi)
-    if a.size < 2 or not np.all(np.isfinite(a)):
-        return None
-    order = np.argsort(a, kind="stable")
-    return None if np.array_equal(order, np.arange(a.size)) else order
-
-
-def _points_taken(r, idx):
-    """The FRFResult ``r`` with its points taken in the order ``idx``."""
-    return dataclasses.replace(r, H=r.H[:, idx], coherence=r.coherence[:, idx], n_averages=r.n_averages[idx],
-                               point_index=r.point_index[idx], point_angle=r.point_angle[idx])
-
-
-def _result_points_taken(res, idx):
-    return dataclasses.replace(res, shapes=res.shapes[:, :, idx], fit_error=res.fit_error[:, idx],
-                               synthesis=res.synthesis[:, idx])
-
-
-def _table_points_taken(t, idx):
-    return dataclasses.replace(t, shapes=t.shapes[:, :, idx], fit_error=t.fit_error[:, idx],
-                               point_angle=t.point_angle[idx], point_index=t.point_index[idx],
-                               synthesis=None if t.synthesis is None else t.synthesis[:, idx])
