@@ -141,7 +141,7 @@ def _model_stages(table, params: TyreParameters, rim_how: str, opt: RunOptions, 
     rows = to_rows(table)
     measured = usable_modes(rows, dopt, source="modal.h5", on_empty=lambda: no_usable_modes(
         f"{source['path']} (its modal table)", rows, modes_from_rows(rows)[1]))
-    base = base_fit(measured.modes, params, dopt)
+    base = base_fit(measured.modes, params, dopt, grid_points(table.point_angle))
     ident, n_pred = _identify_report(base, measured, params, opt)
     write_text_atomic(outdir / "identify.json", json_text(ident), overwrite=True)
     say("diagnose")
