@@ -102,33 +102,46 @@ def reread_aliased(modes, base_params, opt, n_points) -> tuple[list, list[dict]]
     modes = list(modes)
     al = [i for i, m in enumerate(modes) if m.aliased]
     read = [m for m in modes if not m.aliased]
-    k = len(opt.free)
-    if not n_points or not al or len(read) < k + 2:
+    if not n_points or not al or len(read) < len(opt.free) + 2:
         return modes, []
     rf = robust_fit(read, base_params, fit_options(opt), alpha=opt.alpha)
+    wants = {}
+    for i in al:
+        got = _class_reading(modes[i], rf, n_points)
+        if got is not None:
+            wants[i] = got
+    out, changed = _relabel_wanted(modes, wants, n_points)
+    if not changed:
+        return modes, []
+    return _pairs_whole(out), changed
+
+
+def _class_reading(m, rf: RobustFit, n_points: int):
+    """The order of ``m``'s alias class above N/2 (same branch) that the fit ``rf`` puts nearest
+    its frequency, as (order, model Hz, |ln(f_model/f)|) — when it differs from the order read
+    and the reading is unambiguous: ``rf``'s outlier screen keeps that order and rejects every
+    other order of the class, the one read among them (a flat branch top puts many orders of
+    a class at one frequency: no reading there). None otherwise."""
     model = rf.fit
     _, z_read = normalised_errors(model, rf.kept)
     med = float(np.median(z_read))
-    half = n_points / 2
-    wants = {}
-    for i in al:
-        m = modes[i]
-        r = m.n % n_points
-        top = m.n + 2 * n_points
-        cls = sorted({k for j in range(0, top // n_points + 1) for k in (j * n_points + r, j * n_points - r)
-                      if half < k <= top})
-        if m.n not in cls:
-            continue
-        fm = model_frequencies(model.parameters, cls, [m.branch] * len(cls), model.effects or None)
-        err = np.abs(np.log(np.where(np.isfinite(fm) & (fm > 0), fm, np.inf) / m.frequency_hz))
-        j = int(np.argmin(err))
-        # unambiguous: the model's outlier screen keeps that order and rejects every other
-        # order of the class, the one read among them (a flat branch top puts many orders
-        # of a class at one frequency: no reading there)
-        z = np.where(np.isfinite(fm), (fm - m.frequency_hz) / m.uncertainty_hz, np.inf)
-        inside = np.abs(z - med) / rf.scale <= rf.z_crit
-        if cls[j] != m.n and inside[j] and inside.sum() == 1:
-            wants[i] = (cls[j], float(fm[j]), float(err[j]))
+    r, top = m.n % n_points, m.n + 2 * n_points
+    cls = sorted({k for j in range(0, top // n_points + 1) for k in (j * n_points + r, j * n_points - r)
+                  if n_points / 2 < k <= top})
+    if m.n not in cls:
+        return None
+    fm = model_frequencies(model.parameters, cls, [m.branch] * len(cls), model.effects or None)
+    err = np.abs(np.log(np.where(np.isfinite(fm) & (fm > 0), fm, np.inf) / m.frequency_hz))
+    j = int(np.argmin(err))
+    z = np.where(np.isfinite(fm), (fm - m.frequency_hz) / m.uncertainty_hz, np.inf)
+    inside = np.abs(z - med) / rf.scale <= rf.z_crit
+    if cls[j] != m.n and inside[j] and inside.sum() == 1:
+        return cls[j], float(fm[j]), float(err[j])
+    return None
+
+
+def _relabel_wanted(modes, wants: dict, n_points: int) -> tuple[list, list[dict]]:
+    """Relabel each wanted mode (nearest first) unless another mode holds that (n, branch)."""
     taken = {(m.n, m.branch): i for i, m in enumerate(modes) if i not in wants}
     out, changed = list(modes), []
     for i in sorted(wants, key=lambda i: wants[i][2]):
@@ -140,19 +153,21 @@ def reread_aliased(modes, base_params, opt, n_points) -> tuple[list, list[dict]]
         out[i] = dataclasses.replace(m, n=kk, member=None,
                                      source=f"{m.source} (read as n = {m.n}: its alias class on {n_points} points "
                                             f"re-read from the model)")
+        r = min(m.n % n_points, n_points - m.n % n_points)
         changed.append({"frequency_hz": m.frequency_hz, "read_as": {"n": m.n, "branch": m.branch},
                         "relabelled": {"n": kk, "branch": m.branch}, "model_hz": f,
-                        "reason": f"aliased order re-read in its class n ≡ ±{min(m.n % n_points, n_points - m.n % n_points)}"
-                                  f" (mod {n_points}): the model fitted to the orders the points read puts "
-                                  f"n = {kk} {m.branch} at {f:.2f} Hz"})
-    if not changed:
-        return modes, []
+                        "reason": f"aliased order re-read in its class n ≡ ±{r} (mod {n_points}): the model "
+                                  f"fitted to the orders the points read puts n = {kk} {m.branch} at {f:.2f} Hz"})
+    return out, changed
+
+
+def _pairs_whole(modes) -> list:
+    """A split pair that lost a member is one mode again."""
     count = {}
-    for m in out:
+    for m in modes:
         if m.member:
             count[(m.n, m.branch)] = count.get((m.n, m.branch), 0) + 1
-    out = [dataclasses.replace(m, member=None) if m.member and count[(m.n, m.branch)] < 2 else m for m in out]
-    return out, changed
+    return [dataclasses.replace(m, member=None) if m.member and count[(m.n, m.branch)] < 2 else m for m in modes]
 
 
 def trimmed_loss(rf: RobustFit) -> float:
