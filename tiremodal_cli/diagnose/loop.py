@@ -33,7 +33,7 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from tiremodal_cli.diagnose.aliases import recheck
+from tiremodal_cli.diagnose.aliases import recheck, reread_aliased, trimmed_loss
 from tiremodal_cli.diagnose.candidates import choose, try_candidate
 from tiremodal_cli.diagnose.cavity import unexplained_band_modes
 from tiremodal_cli.diagnose.identifiability import mark_undetermined, profile_rim_mass
@@ -109,11 +109,22 @@ def usable_modes(rows, opt: DiagnoseOptions, *, min_confidence: float = 0.5, sou
     return MeasuredModes(tuple(_with_sigma(modes, opt)), tuple(skipped), tuple(_unexplained_rows(skipped, rows)))
 
 
-def base_fit(modes, base_params: TyreParameters, opt: DiagnoseOptions) -> RobustFit:
+def base_fit(modes, base_params: TyreParameters, opt: DiagnoseOptions, n_points: int | None = None) -> RobustFit:
     """The base model's robust fit (:func:`tiremodal_cli.tyre.robust.robust_fit`): the one base fit
-    of a run, made by ``identify`` and handed to :func:`diagnose`."""
+    of a run, made by ``identify`` and handed to :func:`diagnose`. With the test's number of
+    points ``n_points``, the aliased modes' orders are re-read within their alias class from
+    the model the other modes determine (:func:`tiremodal_cli.diagnose.aliases.reread_aliased`),
+    and that reading is kept when its robust fit has the lower trimmed loss
+    (:func:`tiremodal_cli.diagnose.aliases.trimmed_loss`: both readings are a model's, the
+    one the base model explains better stands); the re-read modes are in ``relabelled``."""
     opt.check(base_params)
-    return robust_fit(modes, base_params, fit_options(opt), alpha=opt.alpha)
+    rf = robust_fit(modes, base_params, fit_options(opt), alpha=opt.alpha)
+    reread, changed = reread_aliased(modes, base_params, opt, n_points)
+    if changed:
+        other = robust_fit(reread, base_params, fit_options(opt), alpha=opt.alpha)
+        if trimmed_loss(other) < trimmed_loss(rf):
+            rf = dataclasses.replace(other, relabelled=tuple(changed))
+    return rf
 
 
 def diagnose(rows, base_params: TyreParameters = TyreParameters(), opt: DiagnoseOptions = DiagnoseOptions(),
@@ -143,7 +154,7 @@ def diagnose(rows, base_params: TyreParameters = TyreParameters(), opt: Diagnose
     opt.check(base_params)
     measured = rows if isinstance(rows, MeasuredModes) else usable_modes(rows, opt, min_confidence=min_confidence)
     if base is None:
-        base = base_fit(measured.modes, base_params, opt)
+        base = base_fit(measured.modes, base_params, opt, n_points)
     names = [c for c in (opt.candidates or tuple(EFFECTS) + PARAMETER_CANDIDATES)
              if not (c in PARAMETER_CANDIDATES and c in opt.free)]
     ticks = _Ticker(progress, 1 + len(names) * max(opt.max_effects, 1))
@@ -191,7 +202,7 @@ def _search(base: RobustFit, names, extra: tuple, n_points, opt: DiagnoseOptions
     membrane's high-n same-branch modes, on a branch the base model holds flat — finds an
     alias on the flat branch and testifies against the effect that explains it.)"""
     before = _residual(base, opt, extra, ())
-    s = _Search(current=base, residual_before=before, residual_now=before)
+    s = _Search(current=base, residual_before=before, residual_now=before, relabelled=list(base.relabelled))
     rnd, retried = 1, False
     while rnd <= opt.max_effects or (opt.max_effects > 0 and _cavity_pending(s, names)):
         pool = names if rnd <= opt.max_effects else [n for n in names if n in EFFECTS

@@ -85,7 +85,8 @@ class RobustFit:
     fit : FitResult on ``kept`` ; kept : the modes fitted (with σ) ; set_aside : the
     others, each with its reason ; z_crit : the outlier limit used ; scale : the robust
     spread s of the kept modes' normalised errors (≥ 1) ; alpha : the false-rejection rate
-    the limit was set for
+    the limit was set for ; relabelled : aliased modes whose order the base fit re-read
+    (:func:`tiremodal_cli.diagnose.aliases.reread_aliased`), each as a dict
     """
 
     fit: FitResult
@@ -94,6 +95,7 @@ class RobustFit:
     z_crit: float
     scale: float
     alpha: float
+    relabelled: tuple = ()
 
     @property
     def modes(self) -> tuple[MeasuredMode, ...]:

@@ -183,7 +183,7 @@ def _model_stages(table, params: TyreParameters, rim_how: str, opt: RunOptions, 
     what = "modes.csv" if isinstance(table, list) else "modal.h5"
     measured = usable_modes(rows, dopt, source=what, on_empty=lambda: no_usable_modes(
         f"{source['path']} (its modal table)", rows, modes_from_rows(rows)[1]))
-    base = base_fit(measured.modes, params, dopt)
+    base = base_fit(measured.modes, params, dopt, grid_points(table.point_angle))
     ident, n_pred = _identify_report(base, measured, params, opt)
     write_text_atomic(outdir / "identify.json", json_text(ident), overwrite=True)
     say("diagnose")

@@ -160,6 +160,21 @@ def config_for(case: Case) -> SimulationConfig:
     return SimulationConfig(params=params, effects=effects, **common)
 
 
+def _detectable_parts(case: Case, params: TyreParameters) -> dict:
+    """Each effect of a case with two, judged alone (:func:`detectable` on the same test
+    set-up with that effect only): an effect that this test cannot show alone is not
+    required of the diagnosis beside the other (its names stay allowed). {} for one effect."""
+    parts = [p for p in case.physics.split("+") if p != "none"]
+    if len(parts) < 2:
+        return {}
+    out = {}
+    for p in parts:
+        one = dataclasses.replace(case, physics=p)
+        cfg = config_for(one)
+        out[p] = bool(detectable(one, expected_groups(simulate(cfg), cfg), params)["detectable"])
+    return out
+
+
 def run_case(case: Case, workdir) -> dict:
     """Simulate a case, take it through ``run`` and score it (the module docstring).
 
@@ -191,12 +206,14 @@ def run_case(case: Case, workdir) -> dict:
     # an effect adopted and a parameter found off, each once (a parameter can be both)
     adopted = list(dict.fromkeys(list(diag.get("adopted_effects", [])) + list(diag.get("parameter_off", []))))
     man = json.loads((workdir / "run" / "run.json").read_text(encoding="utf-8"))
-    det = detectable(case, groups, TyreParameters.from_mapping(man["params"]).replace(
-        P0=man["model_P0"], m_w=man["model_m_w"]))
+    params = TyreParameters.from_mapping(man["params"]).replace(P0=man["model_P0"], m_w=man["model_m_w"])
+    det = detectable(case, groups, params)
+    det_parts = _detectable_parts(case, params) if det["detectable"] else {}
     rec.update(status="ok", **sc, base_rms_pct=float(diag["base"]["rms_error_pct"]),
                final_rms_pct=float(diag["augmented"]["rms_error_pct"]), adopted_effects=adopted,
                detectable=det["detectable"], truth_base_rms_pct=det["rms_pct"],
                set_aside=len(diag.get("set_aside_before", [])),
-               diagnosis_right=diagnosis_right(case.physics, adopted, det["detectable"]),
+               detectable_parts=det_parts,
+               diagnosis_right=diagnosis_right(case.physics, adopted, det_parts or det["detectable"]),
                verdict=diag.get("verdict", ""))
     return rec

@@ -206,43 +206,50 @@ def _surplus(groups: list[dict], rows: list[dict]) -> int:
     return int(np.sum(near.any(axis=1) & (matched < 0)))
 
 
-def diagnosis_right(physics: str, adopted: list[str], detectable: bool = True) -> bool:
+def diagnosis_right(physics: str, adopted: list[str], detectable: bool | dict = True) -> bool:
     """Right when every part of ``physics`` has one of its required names adopted and
     nothing else is adopted but their allowed names; an effect the base model absorbs within
-    the noise (:func:`detectable`): that, or nothing."""
+    the noise (:func:`detectable`) needs nothing: it is not required, and its names stay
+    allowed. ``detectable``: one verdict for the whole case, or one per part
+    ({part: bool}, a part missing from it counted detectable)."""
     parts = [p for p in physics.split("+") if p != "none"]
     if not parts:
         return not adopted
-    if not detectable and not adopted:  # at the edge of detectability: nothing, or the right effect
-        return True
-    spec = [EXPECTED_DIAGNOSIS.get(p, ((p,), ())) for p in parts]
-    ok = set().union(*(set(r) | set(a) for r, a in spec))
+    det = {p: (detectable.get(p, True) if isinstance(detectable, dict) else bool(detectable)) for p in parts}
+    spec = {p: EXPECTED_DIAGNOSIS.get(p, ((p,), ())) for p in parts}
+    ok = set().union(*(set(r) | set(a) for r, a in spec.values()))
     if any(a not in ok for a in adopted):
         return False
-    return all(any(a in r for a in adopted) for r, _ in spec)
+    return all(any(a in spec[p][0] for a in adopted) for p in parts if det[p])
 
 
 def detectable(case, groups, params: TyreParameters) -> dict:
-    """Can the paper's model tell this case's physics from noise, given perfect modes?
+    """Can the paper's model tell this case's physics from noise, given the modes a test shows?
 
     The base model (k_r1, k_r2, EI free, rim as in ``run``) is fitted robustly to the
-    case's expected same/opposite truth modes (split pairs as their two members), each with
-    the diagnosis's 0.1 % frequency uncertainty: the physics is *detectable* when that fit's
+    case's expected same/opposite truth modes as a test can show them, each with the
+    diagnosis's 0.1 % frequency uncertainty: the physics is *detectable* when that fit's
     residual exceeds the noise (χ² p < 0.01 or a mode set aside). An effect the base model
     absorbs within the noise is not missing physics for it, and a right diagnosis adopts
-    nothing. Returns {"detectable", "rms_pct", "p_value", "set_aside"}."""
+    nothing. A pair split by less than ζ f is one mode (:func:`expected_groups`: its two
+    peaks merge into one under the damping), at the mean of its members — on the grid of
+    points the cos and sin members carry the same modal energy, so one pole fitted to the
+    pair's summed response sits between them, at their mean; a pair split by more (two
+    groups of one n and branch) enters as its lower and upper member, as ``diagnose``
+    takes a resolved split pair. Returns {"detectable", "rms_pct", "p_value", "set_aside"}."""
     if case.physics == "none":
         return {"detectable": False, "rms_pct": 0.0, "p_value": 1.0, "set_aside": 0}
+    kept = [g for g in groups if g["expected"] and g["branch"] in ("same", "opposite") and not g["aliased"]]
+    by_order = {}
+    for g in kept:
+        by_order.setdefault((g["n"], g["branch"]), []).append(float(np.mean(g["members"])))
     modes = []
-    for g in groups:
-        if not (g["expected"] and g["branch"] in ("same", "opposite") and not g["aliased"]):
-            continue
-        mem = sorted(g["members"])
-        if len(mem) >= 2 and mem[-1] - mem[0] > 1e-6 * mem[0]:
-            modes += [MeasuredMode(g["n"], g["branch"], mem[0], member="lower"),
-                      MeasuredMode(g["n"], g["branch"], mem[-1], member="upper")]
+    for (n, branch), fs in by_order.items():
+        fs = sorted(fs)
+        if len(fs) >= 2:  # a resolved split pair: its outer members
+            modes += [MeasuredMode(n, branch, fs[0], member="lower"), MeasuredMode(n, branch, fs[-1], member="upper")]
         else:
-            modes.append(MeasuredMode(g["n"], g["branch"], float(np.mean(mem))))
+            modes.append(MeasuredMode(n, branch, fs[0]))
     opt = DiagnoseOptions(alpha=DETECT_ALPHA)
     rf = base_fit(with_sigma(modes, opt.noise_floor_pct), params, opt)
     res = residual_analysis(rf, opt)
