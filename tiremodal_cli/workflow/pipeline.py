@@ -183,12 +183,12 @@ def _model_stages(table, params: TyreParameters, rim_how: str, opt: RunOptions, 
     what = "modes.csv" if isinstance(table, list) else "modal.h5"
     measured = usable_modes(rows, dopt, source=what, on_empty=lambda: no_usable_modes(
         f"{source['path']} (its modal table)", rows, modes_from_rows(rows)[1]))
-    base = base_fit(measured.modes, params, dopt, grid_points(table.point_angle))
+    n_points = None if isinstance(table, list) else grid_points(table.point_angle)  # (a table of modes: no points)
+    base = base_fit(measured.modes, params, dopt, n_points)
     ident, n_pred = _identify_report(base, measured, params, opt)
     write_text_atomic(outdir / "identify.json", json_text(ident), overwrite=True)
     say("diagnose")
-    diag = diagnose(measured, params, dopt, n_points=None if isinstance(table, list) else grid_points(table.point_angle),
-                    base=base)
+    diag = diagnose(measured, params, dopt, n_points=n_points, base=base)
     rep = report(diag, n_pred)
     write_text_atomic(outdir / "diagnosis.json", json_text(rep), overwrite=True)
     write_text_atomic(outdir / "sensitivity.json", json_text(_sensitivity(diag.augmented, n_pred)), overwrite=True)
