@@ -111,7 +111,8 @@ def verdict_text(adopted, tried, before, after, unexplained) -> str:
              f"max {before['max_error_pct']:.3f} % → {after['max_error_pct']:.3f} %")
         if after["exceeds_noise"]:
             v += ("; a residual remains that no candidate explains ("
-                  + "; ".join(after["pattern"]["findings"][1:] or ["no clear pattern"]) + ")")
+                  + "; ".join([f for f in after["pattern"]["findings"] if not f.startswith("the residual exceeds")]
+                              or ["no clear pattern"]) + ")")
     else:
         v = ("a residual remains that no candidate explains: "
              + "; ".join(before["pattern"]["findings"]))

@@ -106,14 +106,14 @@ def _findings(pattern, chi2, dof, p, opt, n_extra, set_aside=()) -> list[str]:
     out = []
     if p < opt.alpha:
         out.append(f"the residual exceeds the noise: χ² = {chi2:.1f} on {dof} degrees of freedom (p = {p:.2g})")
-    else:
-        out.append(f"the residual is at the level of the noise: χ² = {chi2:.1f} on {dof} degrees of freedom "
-                   f"(p = {p:.2g})")
     if set_aside:
         out.append(f"{len(set_aside)} mode(s) the model cannot represent, set aside: "
                    + ", ".join(f"n = {a.mode.n} {a.mode.branch} at {a.mode.frequency_hz:.1f} Hz"
                                + (f" ({a.error_pct:+.1f} %)" if np.isfinite(a.error_pct) else " (no such model mode)")
                                for a in set_aside))
+    if p >= opt.alpha:  # (with modes set aside, the residual that remains is theirs: say whose is at the noise)
+        out.append(f"the {'kept modes’ ' if set_aside else ''}residual is at the level of the noise: χ² = {chi2:.1f} "
+                   f"on {dof} degrees of freedom (p = {p:.2g})")
     for b, e in pattern["branches"].items():
         t = e.get("slope_t")
         if t is not None and abs(t) >= 3:
