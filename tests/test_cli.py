@@ -108,3 +108,22 @@ def test_run_on_short_records_lowers_the_model_order_to_the_band(tmp_path, caplo
     res = run_cli(["run", tmp_path / "s64.h5", "-o", tmp_path / "r64"])
     assert res.exit_code == 2 and str(tmp_path / "s64.h5") in res.stderr and "longer records" in res.stderr
     assert not (tmp_path / "r64").exists()
+
+
+def test_run_on_records_of_any_length_reaches_a_diagnosis(tmp_path):
+    """Short records the helpers of session 9 found failing, each a valid test: 224 samples
+    (87 lines in the band: the two-reference sweep's order 30 needs more impulse-response
+    samples than 87 — lowered to (K − 2)/3 = 28) and 128 samples with seed 1 (4 usable
+    modes: a candidate with 5 free parameters is "not judged" instead of ending the run)."""
+    import json
+
+    from tiremodal_cli.io.measurement import write_measurement
+    from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
+
+    for n, seed in ((224, 1), (128, 1)):
+        write_measurement(tmp_path / f"s{n}.h5", simulate(SimulationConfig(n_samples=n, sample_rate=1024.0,
+                                                                           seed=seed)).measurement)
+        res = run_cli(["run", tmp_path / f"s{n}.h5", "-o", tmp_path / f"r{n}"])
+        assert res.exit_code == 0, (n, res.output)
+        s = json.loads((tmp_path / f"r{n}" / "run.json").read_text())["summary"]
+        assert s["modes_found"] > 0 and s["adopted_effects"] == [], (n, s["verdict"])

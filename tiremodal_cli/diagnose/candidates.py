@@ -17,7 +17,7 @@ from tiremodal_cli.tyre.fit_types import DEFAULT_BOUNDS
 from tiremodal_cli.tyre.model import NOMINAL_RIM_KG
 from tiremodal_cli.tyre.robust import RobustFit, robust_fit
 
-__all__ = ["try_candidate", "adopt_reason", "choose", "split_evidence", "on_ridge"]
+__all__ = ["try_candidate", "adopt_reason", "choose", "split_evidence", "on_ridge", "too_few_modes"]
 
 
 def _effect_spec(name, fixed_effects):
@@ -184,6 +184,9 @@ def _judged(name, common, trial: Trial, p0, fo, scoring: Scoring) -> Candidate:
     them in the fit — a candidate cannot buy a mode back by bending the others."""
     current, opt = trial.current, trial.opt
     kept = set(current.kept)
+    few = too_few_modes(len(testimony(current)), len(fo.free) + len(fo.effect_free))
+    if few:
+        return no_evidence(name, few, common)
     rc = robust_fit(testimony(current), p0, fo, alpha=opt.alpha, scale=current.scale, protect=lambda m: m in kept)
     data = rc.kept
     cur = current.fit if set(data) == kept else aligned(refit_on(current.fit, data, opt), data)
@@ -191,6 +194,15 @@ def _judged(name, common, trial: Trial, p0, fo, scoring: Scoring) -> Candidate:
     back = tuple(a.to_dict() for a in current.set_aside if a.mode in set(rc.kept))
     return Candidate(name=name, reason=why or "passes", passes=why is None, adopted=False, robust=rc,
                      data=tuple(data), brought_back=back, bounds=scoring.bounds, **fields, **common)
+
+
+def too_few_modes(n_modes: int, k: int) -> str | None:
+    """Why a candidate of ``k`` free parameters cannot be judged on ``n_modes`` modes (its fit
+    needs a degree of freedom left for the F-test and the χ²), or None."""
+    if n_modes > k:
+        return None
+    return (f"not judged: {n_modes} modes for its {k} free parameters (a judgement needs more modes than "
+            "parameters: longer records or a wider band give more)")
 
 
 def adopt_reason(c: Candidate, runner: Candidate | None) -> str:

@@ -123,6 +123,11 @@ def try_cavity(name, spec: CavitySpec, trial: Trial, common: dict) -> Candidate:
     if not cands:
         return no_evidence(name, f"no evidence: no unexplained n = 1 mode in the cavity band {lo:.0f}–{hi:.0f} Hz",
                            common)
+    from tiremodal_cli.diagnose.candidates import too_few_modes  # (candidates imports this module)
+
+    few = too_few_modes(len(testimony(current)) + 1, len(spec.struct_free) + len(spec.efree))
+    if few:
+        return no_evidence(name, few, common)
     _, cav, rc, struct, cav_mode = min((_cavity_fit(name, spec, cav, current, opt) for cav in cands),
                                        key=lambda t: t[0])
     kept_struct = [m for m in rc.kept if m.branch != "cavity"]

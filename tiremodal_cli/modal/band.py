@@ -106,11 +106,14 @@ def band_or_every_line(freq_hz, band_hz) -> tuple[float, float]:
     return (float(pos[0]), float(pos[-1]))
 
 
-def order_for_lines(order: int, n_lines: int, lower: bool) -> int:
-    """A sweep's highest model order for a band of ``n_lines`` lines (at most K/2 − 1):
-    ``order`` itself; when that is too high, the highest allowed if ``lower`` (said in a
-    warning: ``run`` has no order option), else ParameterError."""
-    top = n_lines // 2 - 1
+def order_for_lines(order: int, n_lines: int, lower: bool, n_ref: int = 1) -> int:
+    """A sweep's highest model order for a band of ``n_lines`` lines: ``order`` itself; when
+    that is too high, the highest allowed if ``lower`` (said in a warning: ``run`` has no
+    order option), else ParameterError. One reference: at most K/2 − 1; ``n_ref``
+    references (the poly-reference sweep, :func:`~tiremodal_cli.modal.lsce.sweep_poly`):
+    its p + 1 lags of n_ref columns need as many rows of the K − p the K-sample impulse
+    responses give, p ≤ (K − n_ref) / (n_ref + 1) (28 for 87 lines and two references)."""
+    top = n_lines // 2 - 1 if n_ref == 1 else (n_lines - n_ref) // (n_ref + 1)
     if order <= top:
         return order
     if not lower or top < 2:

@@ -269,10 +269,10 @@ def _order_groups(band: _Band, point_angle, spatial: bool, opt: ModalOptions):
     else:
         groups = {-1: (band.Hb.reshape(-1, K), np.eye(n_live * n_p))}
         group_max = opt.max_order
-    top = order_for_lines(group_max, K, opt.order_within_band)
-    if top < group_max:  # (short records, for run)
-        group_max, opt = top, replace(opt, poly_order=min(opt.poly_order, max(1, top // 2)))
-    return groups, group_max, opt
+    top = order_for_lines(group_max, K, opt.order_within_band)  # (short records lower it, for run)
+    poly = min(opt.poly_order, max(1, top // 2)) if top < group_max else opt.poly_order
+    poly = order_for_lines(poly, K, opt.order_within_band, n_ref=2) if spatial else poly
+    return groups, top, replace(opt, poly_order=poly)
 
 
 def _group_poles(data: GroupData, b, spatial: bool, group_max: int) -> list:
