@@ -15,11 +15,12 @@ import numpy as np
 import scipy.special
 
 from tiremodal_cli.frf.windows import correct_poles
+from tiremodal_cli.modal.groupfit import PEAK_OVER_NOISE
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import mpc
 
 __all__ = ["GroupMode", "MergedMode", "SAME_POLE_ALPHA", "SAME_POLE_FLOOR_BW", "swap_cost", "merge_groups",
-           "off_edges", "leak_copies"]
+           "off_edges", "leak_copies", "under_residual"]
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,8 @@ class MergedMode:
     """A physical pole: the dominant group's pole, the groups' shares of its shape summed.
 
     order_energy : {group: share of the mode's energy} ; frequency_std_hz : the dominant
-    group's cluster's scatter (Hz)
+    group's cluster's scatter (Hz) ; peak, group_noise : the dominant group's
+    :attr:`GroupMode.peak` and :attr:`GroupMode.group_noise` (accelerance, rows' norm)
     """
 
     pole: complex
@@ -58,6 +60,8 @@ class MergedMode:
     order_energy: dict
     significance_in_group: float
     frequency_std_hz: float
+    peak: float = 0.0
+    group_noise: float = 0.0
 
 
 #: probability that one pole seen in two order groups is taken for two modes: the swap test
@@ -148,9 +152,82 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA) -> list
             used[j] = True
         out.append(MergedMode(found[i].pole, found[i].group, phys, found[i].significance,
                               {int(found[j].group): float(energy[j] / tot) for j in groups_seen.values()},
-                              found[i].significance_in_group, found[i].frequency_std_hz))
+                              found[i].significance_in_group, found[i].frequency_std_hz, found[i].peak,
+                              found[i].group_noise))
     out.sort(key=lambda m: abs(m.pole))
     return out
+
+
+def under_residual(modes: list[MergedMode], line_hz: float, n_channels: int, min_significance: float = 0.05,
+                   ratio: float = PEAK_OVER_NOISE, min_mac: float = 0.9) -> tuple[list, list]:
+    """Drop the weak leaks of a stronger mode of another order group (docs/lsce.md).
+
+    A mode j is a stronger mode i seen in another order, and dropped, when all hold:
+    (a) j explains under ``min_significance`` of the physical response in its half-power
+    band (it was kept only for its share within its group); (b) its response at resonance
+    in its group's rows (:attr:`MergedMode.peak`) is under ``ratio``
+    (:data:`~tiremodal_cli.modal.groupfit.PEAK_OVER_NOISE`, 3) × that group's fit residual
+    RMS per line (:attr:`MergedMode.group_noise`; the visibility rule); (c) its pole
+    scatters by more than one line ``line_hz`` over the model orders (the FRFs' resolution,
+    as (c) of :func:`~tiremodal_cli.modal.groupfit.own_peaks`); (d) it lies within ζ_i f_i
+    of a mode of another group with a larger peak (the candidate window of
+    :func:`merge_groups`); (e) it and the strongest of those, i, have one pattern at the
+    sensors, MAC ≥ ``min_mac`` (0.9, the stabilization's cluster MAC) of their channel
+    vectors (:func:`channel_mac`: a roving-hammer residue is φ(c) ψ(p), one φ per physical
+    mode in every group). Such a pole is fitted to i's leak into j's group (an added mass
+    puts every mode into every order), biased too far from i for the swap test. Each
+    condition keeps real modes: (a) those the physical share supports; (b) a weak mode on a
+    peak of its own; (c) the ring's sidewall same-direction modes pinned under their group's
+    residual; (d) a weak mode alone; (e) a weak mode of the other branch beside a strong one.
+    For a complete grid (or no spatial split): with points missing, every group's residual
+    holds every order's leak (those are judged by :func:`leak_copies`).
+
+    Parameters
+    ----------
+    modes : list of MergedMode ; line_hz : float, Hz, the band's line spacing
+    n_channels : int, live response channels (the residues are channel-major)
+
+    Returns
+    -------
+    kept : list of MergedMode ; dropped : list of dict (frequency, damping, group, reason)
+    """
+    if not modes:
+        return modes, []
+    fn, zeta = poles_to_modal(np.array([m.pole for m in modes]))
+    kept, dropped = [], []
+    for j, m in enumerate(modes):
+        over = [i for i, o in enumerate(modes) if o.group != m.group and o.peak > m.peak
+                and abs(fn[j] - fn[i]) <= zeta[i] * fn[i]]
+        if (m.significance >= min_significance or m.peak >= ratio * m.group_noise
+                or not m.frequency_std_hz > line_hz or not over):
+            kept.append(m)
+            continue
+        i = max(over, key=lambda i: modes[i].peak)
+        cm = channel_mac(modes[i].residues, m.residues, n_channels)
+        if cm < min_mac:
+            kept.append(m)
+            continue
+        dropped.append({"frequency_hz": float(fn[j]), "damping_ratio": float(zeta[j]), "group": int(m.group),
+                        "reason": f"a leak of the group {modes[i].group} mode at {fn[i]:.2f} Hz: it explains "
+                                  f"{100 * m.significance:.1f} % of the response at its frequency, its response "
+                                  f"{m.peak:.3g} at resonance is under {ratio:g} × its group's fit residual RMS "
+                                  f"{m.group_noise:.3g} and its pole scatters by {m.frequency_std_hz:.2f} Hz over "
+                                  f"the model orders (more than a line, {line_hz:.3g} Hz); MAC of the two modes' "
+                                  f"responses at the sensors {cm:.3f}"})
+    return kept, dropped
+
+
+def channel_mac(a, b, n_channels: int) -> float:
+    """MAC of two modes' patterns over the response channels (the sensors).
+
+    In a roving-hammer test the residue of mode r at channel c and point p is φ_r(c) ψ_r(p):
+    its order groups' shares differ in ψ (the points' pattern) only; φ_r, the response at
+    the fixed sensors, is one for the mode in every group. ``a``, ``b`` : (n_channels ·
+    n_points,) residues (channel-major); φ is the leading left singular vector of each
+    (n_channels, n_points) matrix.
+    """
+    u = [np.linalg.svd(np.asarray(x).reshape(n_channels, -1), full_matrices=False)[0][:, 0] for x in (a, b)]
+    return float(abs(np.vdot(u[0], u[1])) ** 2 / (np.vdot(u[0], u[0]).real * np.vdot(u[1], u[1]).real))
 
 
 def leak_copies(found: list[GroupMode], leak: dict) -> tuple[list, list]:

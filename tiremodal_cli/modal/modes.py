@@ -24,7 +24,7 @@ from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
 from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
 from tiremodal_cli.modal.lsfd import mpc
-from tiremodal_cli.modal.merge import GroupMode, leak_copies, merge_groups, off_edges, swap_cost
+from tiremodal_cli.modal.merge import GroupMode, leak_copies, merge_groups, off_edges, swap_cost, under_residual
 from tiremodal_cli.modal.plscf import sweep_plscf
 from tiremodal_cli.modal.spatial import decompose, grid_points, leakage
 from tiremodal_cli.modal.stabilization import StabilizationOptions, stabilize
@@ -205,7 +205,11 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     if spatial and grid_points(point_angle) > len(point_angle):  # points missing: every order leaks
         found, copies = leak_copies(found, leakage(point_angle))
         rejected += copies
-    modes, edge = off_edges(merge_groups(found), band.freq[0], band.freq[-1], exp_tau_s)
+    modes = merge_groups(found)
+    if not (spatial and grid_points(point_angle) > len(point_angle)):  # (with gaps: leak_copies only)
+        modes, unseen = under_residual(modes, band.freq[1] - band.freq[0], band.Hb.shape[0], opt.min_significance)
+        rejected += unseen
+    modes, edge = off_edges(modes, band.freq[0], band.freq[-1], exp_tau_s)
     if not modes:
         raise no_stable_mode(band.freq, group_max)
     meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
