@@ -107,3 +107,21 @@ def test_a_stack_of_point_mass_problems_equals_one_at_a_time(effects, m_w):
                     np.testing.assert_allclose(got[s, n, c], ref[(n, b)], rtol=1e-12)
                 else:
                     assert np.all(np.isnan(got[s, n, c]))
+
+
+@pytest.mark.parametrize("key", ["sample", "table_a1"])
+def test_the_local_search_lands_where_the_full_search_does(key):
+    """The present diagnosis with its default local search and with the full evolutionary
+    search for every refit (``search="global"``): the same effects in the same order, the same
+    modes set aside, every final parameter within one standard error (the matrix's 55 cases:
+    benchmarks/search_equivalence.py, docs/performance.md)."""
+    from tiremodal_cli.diagnose.options import DiagnoseOptions
+
+    rows, base, n_points = _table(key)
+    d = {s: diagnose(rows, base, DiagnoseOptions(search=s), n_points=n_points) for s in ("local", "global")}
+    loc, glo = d["local"], d["global"]
+    assert list(loc.adopted) == list(glo.adopted) and loc.adopted
+    assert list(loc.augmented.free) == list(glo.augmented.free)
+    se = np.maximum(loc.augmented.std_errors, glo.augmented.std_errors)
+    assert np.all(np.abs(loc.augmented.values - glo.augmented.values) <= se), (loc.augmented.values, glo.augmented.values)
+    assert loc.augmented.rms_error_pct == pytest.approx(glo.augmented.rms_error_pct, rel=1e-3)
