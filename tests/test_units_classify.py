@@ -155,3 +155,19 @@ def test_grid_top_order_is_read_on_a_uniform_grid_from_any_start():
     S = _shapes(th, [(6, 0.5)])
     (c,) = classify([100.0], S, th, LOCS)
     assert c.n_spatial == 6 and c.n_confidence == pytest.approx(1.0, abs=1e-9)
+
+
+def test_an_unreadable_mode_out_of_order_is_read_on_the_other_branch():
+    """12 points. Same branch n = 1 … 6 at 40 … 90 Hz and n = 8 at 110 Hz; opposite branch
+    n = 0 … 4 at 180 … 220 Hz. A mode at 100 Hz with true n = 7 on the same branch, whose
+    sidewall moves in quadrature (branch confidence 0.1, read "opposite"), reads n_s = 5:
+    out of the opposite branch's order, it is read on the same branch, where of its alias
+    class {5, 7, 17, 19} only 7 fits the dispersion (5 is held, 17 and 19 lie above n = 8)."""
+    th = _grid(12)
+    modes = [(n, 0.5) for n in range(1, 7)] + [(8, 0.5), (7, -0.1 + 1j)] + [(n, -0.5) for n in range(5)]
+    f = [40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 110.0, 100.0, 180.0, 190.0, 200.0, 210.0, 220.0]
+    res = classify(f, _shapes(th, modes), th, LOCS)
+    odd = res[7]
+    assert odd.branch_confidence < 0.5 and odd.n_spatial == 5
+    assert (odd.n, odd.branch, odd.aliased, odd.in_order) == (7, "same", True, True)
+    assert [c.n for c in res[:7]] == [1, 2, 3, 4, 5, 6, 8] and [c.n for c in res[8:]] == [0, 1, 2, 3, 4]

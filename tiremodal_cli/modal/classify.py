@@ -142,6 +142,7 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     ns = _resolve_aliases(_Modes(freq_hz, reads, n_p, significance, significance_group))
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
     reads = _partners_branches(freq_hz, reads, ns)
+    reads = _other_branch(freq_hz, reads, ns, in_order, n_p)
     crowd = _crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads],
                     [o.sure for o in reads], n_p)
     pairs = _split_pairs(freq_hz, reads, ns, in_order)
@@ -254,6 +255,33 @@ def _partners_branches(freq_hz, reads: list[_Reading], ns: list[int]) -> list[_R
         if len(partners) == 1 and sum(1 for q in range(len(reads)) if ns[q] == ns[r]
                                       and reads[q].branch == reads[partners[0]].branch) == 1:
             reads[r] = replace(reads[r], branch=reads[partners[0]].branch)
+    return reads
+
+
+def _other_branch(freq_hz, reads: list[_Reading], ns: list[int], in_order, n_points: int) -> list[_Reading]:
+    """A mode whose branch cannot be read (confidence < 0.5) and that is out of the order of
+    the branch it was read on is read on the other branch, when exactly one order of its
+    alias class (k N ± n_s, k ≤ 2) fits that branch's dispersion: no clear mode of the branch
+    holds that order, every clear mode of a lower order lies below it, every one of a higher
+    order above. ``ns`` and ``in_order`` are updated in place; the order is flagged aliased
+    when it is not the spatial one. (The sample's 260.3 Hz mode: read n = 16 "opposite" at
+    branch confidence 0.22, out of order; on the same branch only n = 18 fits, between n = 17
+    at 251.2 Hz and n = 19 at 269.6 Hz — the generator's n = 18 same at 260.4 Hz.)"""
+    reads = list(reads)
+    for r in range(len(reads)):
+        o = reads[r]
+        if o.branch_confidence >= 0.5 or in_order[r] or o.branch not in (SAME, OPPOSITE):
+            continue
+        other = OPPOSITE if o.branch == SAME else SAME
+        clear = [q for q in range(len(reads)) if q != r and reads[q].branch == other and reads[q].sure]
+        alias = sorted({c for k in range(3) for c in (k * n_points - o.n_spatial, k * n_points + o.n_spatial) if c >= 0})
+        fits = [c for c in alias
+                if all(ns[q] != c for q in clear)
+                and all(freq_hz[q] < freq_hz[r] for q in clear if ns[q] < c)
+                and all(freq_hz[q] > freq_hz[r] for q in clear if ns[q] > c)]
+        if len(fits) == 1 and clear:
+            reads[r] = replace(o, branch=other)
+            ns[r], in_order[r] = fits[0], True
     return reads
 
 
