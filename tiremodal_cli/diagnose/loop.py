@@ -102,7 +102,8 @@ def usable_modes(rows, opt: DiagnoseOptions, *, min_confidence: float = 0.5, sou
     left out, and those of them that fit no structural (n, branch) (the evidence of an air
     cavity or an alias). No usable mode: DataFormatError (its message from ``on_empty()``
     when given)."""
-    modes, skipped = modes_from_rows(rows, min_confidence=min_confidence, split_pairs="members", source=source)
+    modes, skipped = modes_from_rows(rows, min_confidence=min_confidence, split_pairs="members", source=source,
+                                     free_rim=opt.rim == "free")
     if not modes:
         raise DataFormatError(on_empty() if on_empty else
                               "no usable modes: a diagnosis needs modes with n and branch (same/opposite)")
