@@ -14,7 +14,8 @@ from tiremodal_cli.tyre.fit import fit
 from tiremodal_cli.tyre.fit_types import FitResult
 from tiremodal_cli.tyre.robust import RobustFit, robust_fit
 
-__all__ = ["Trial", "Scoring", "judge", "joint_wald_p", "t_level", "testimony", "aligned", "refit_on", "refit_robust", "restrict"]
+__all__ = ["Trial", "Scoring", "judge", "joint_wald_p", "t_level", "testimony", "aligned", "refit_on", "refit_robust",
+           "restrict"]
 
 
 def _param_table(res: FitResult, names) -> dict:

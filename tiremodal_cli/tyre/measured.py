@@ -42,7 +42,8 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
     are left out, and so are rows with ``mpc`` below ``min_mpc`` (not a normal mode) and rows
     flagged out of their branch's dispersion order (``in_order`` false, from lsce; not n = 0,
     the breathing mode, which a hoop stiffness the beam lacks may put far above the low
-    orders: the fit's outlier screen judges it); the two
+    orders: the fit's outlier screen judges it — and, with ``free_rim``, not n = 1 "same",
+    which a free rim's own mode reads as, off the tread's dispersion); the two
     members of a split pair (one n and branch twice, within 5 %) enter as their mean
     frequency (``split_pairs="mean"``) or as two modes marked ``member`` "lower" and
     "upper" (``split_pairs="members"``, for ``diagnose``); of one n and branch twice
@@ -153,11 +154,13 @@ def _row_problem(get, n, b, f, min_confidence, min_mpc, free_rim=False) -> str |
         return f"significance {float(sig):.3f} < {WEAK_SIGNIFICANCE}: its order is read from a weak shape"
     if conf is not None and float(conf) < min_confidence:
         return f"n_confidence {float(conf):.2f} < {min_confidence}"
-    if order_ok is not None and str(order_ok).strip().lower() in ("false", "0") and n != 0 and not (n == 1 and b == "same" and free_rim):
+    rim_mode = n == 1 and b == "same" and free_rim
+    if order_ok is not None and str(order_ok).strip().lower() in ("false", "0") and n != 0 and not rim_mode:
         # n = 0 is not on its branch's dispersion: the breathing mode is held by the belt's
         # hoop stiffness (and the cavity air's uniform pressure), absent from the beam, and
         # may lie far above the low orders; the fit's outlier screen judges it, and a
-        # candidate (the extensible belt) may bring it back
+        # candidate (the extensible belt) may bring it back. Nor is a free rim's own mode,
+        # which reads as n = 1 "same" (tread and sidewall in phase)
         return f"n={n} {b} out of its branch's dispersion order"
     if mpc is not None and float(mpc) < min_mpc:
         return f"mpc {float(mpc):.2f} < {min_mpc}: not a normal mode"
