@@ -8,7 +8,8 @@ turn on top of the current model and scored. A candidate is adopted only when
 1. the current residual exceeds the noise (χ² test at level ``alpha``),
 2. it improves the fit beyond what its extra parameters buy by chance (nested F-test at
    level ``alpha``, and a lower AICc),
-3. its parameter is significant (|value / standard error| ≥ ``min_t``) and physically
+3. its parameter is significant (|value / standard error| ≥ ``min_t``; or, for several that
+   vanish together, jointly: a Wald test at the level 2Φ(−``min_t``)) and physically
    plausible (inside its bounds, not pinned to a search limit), and
 4. it has its own evidence where it needs some: split pairs for a lumped mass, an
    unexplained n = 1 mode in the cavity band for the air cavity.
