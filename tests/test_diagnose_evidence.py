@@ -157,3 +157,40 @@ def test_two_effects_are_both_adopted_whichever_comes_first():
             d = diagnose(rows, p, DiagnoseOptions(candidates=order, max_effects=2))
             assert set(d.adopted) == set(eff) and d.adopted[0] == first, (eff, order, d.adopted)
             assert d.augmented.rms_error_pct < 0.01
+
+
+def test_a_measured_n1_mode_of_a_free_rim_is_the_nearest_model_mode_whatever_its_label():
+    """With a free rim the n = 1 block has three modes (rim, same, opposite); the modal
+    stage reads a label from the sign of two motions, which the rim's motion mixes. Each
+    measured n = 1 mode is matched to the model's nearest, so every labelling of the three
+    true frequencies (from the full eigenproblem of ``solve_modes``) is reproduced exactly."""
+    import itertools
+
+    from tiremodal_cli.tyre.solve import solve_modes
+
+    p = TyreParameters(m_w=60.0)
+    m = solve_modes(p, n_max=1)
+    f1 = sorted(float(f) for f, n, h in zip(m.freq_hz, m.n, m.harmonic) if n == 1 and h == "cos")
+    assert len(f1) == 3
+    for labels in itertools.product(("same", "opposite"), repeat=3):
+        got = model_frequencies(p, [1, 1, 1], list(labels), meas_hz=f1)
+        np.testing.assert_allclose(got, f1, rtol=1e-9)
+        got_eff = model_frequencies(p, [1, 1, 1], list(labels), {"timoshenko": {"rhoI": 0.0, "c_s": 0.0}}, meas_hz=f1)
+        np.testing.assert_allclose(got_eff, f1, rtol=1e-9)
+
+
+def test_a_free_rims_mode_out_of_order_is_evidence_for_the_rim():
+    """A 60 kg free rim: its mode reads as n = 1 "same" below the same branch's n = 1, out
+    of the branch's dispersion order (as the modal stage flags it). The other orders do not
+    see the rim. When the rim channel shows a free rim that row enters the fit, and the rim
+    mass is found (60 kg, from a 1,000 kg start); without it nothing can be adopted."""
+    truth = TyreParameters(m_w=60.0)
+    f_rim = float(model_frequencies(truth, [1], ["same"], meas_hz=[1.0])[0])
+    assert f_rim < float(model_frequencies(truth, [2], ["same"])[0])  # out of the branch's order
+    rows = _rows(truth, keep=lambda n, b: n >= 2)
+    rows.append({"frequency_hz": f_rim, "n": 1, "branch": "same", "in_order": False})
+    start = TyreParameters(m_w=1000.0)
+    free = diagnose(rows, start, DiagnoseOptions(candidates=("m_w", "b"), rim="free", max_effects=1))
+    assert free.adopted == ("m_w",) and abs(free.augmented.parameters.m_w / 60 - 1) < 1e-3
+    unknown = diagnose(rows, start, DiagnoseOptions(candidates=("m_w", "b"), max_effects=1))
+    assert unknown.adopted == ()

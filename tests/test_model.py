@@ -99,6 +99,21 @@ def test_timoshenko_rotary_inertia_grows_with_n():
     assert all(b > a for a, b in zip(rel, rel[1:])) and rel[-1] > 0.02
 
 
+def test_timoshenko_at_its_null_is_the_model_it_extends():
+    """ρI = 0 and a shear-rigid tread (c_s = 1/κGA = 0) are the Euler–Bernoulli model: the
+    candidate is nested in the model it extends (its F-test a test of nested models). A
+    finite κGA with ρI = 0 is not: shear softens the bending, increasingly with n."""
+    base = solve_modes(P, n_max=40)
+    null = solve_modes(P, n_max=40, effects={"timoshenko": {"rhoI": 0.0, "c_s": 0.0}})
+    for b in ("same", "opposite"):
+        f0, f1 = table(base, b), table(null, b)
+        assert_allclose([f1[n] for n in f0], [f0[n] for n in f0], rtol=1e-9)
+    shear = table(solve_modes(P, n_max=40, effects={"timoshenko": {"rhoI": 0.0, "c_s": 1e-5}}), "opposite")
+    opp = table(base, "opposite")
+    soft = [1 - shear[n] / opp[n] for n in (10, 20, 40)]
+    assert 0 < soft[0] < soft[1] < soft[2] and soft[2] > 1e-3
+
+
 def test_viscoelastic_is_self_consistent():
     beta = 0.1
     m = solve_modes(P, n_max=4, effects={"viscoelastic": {"beta": beta}})

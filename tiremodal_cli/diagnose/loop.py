@@ -8,7 +8,8 @@ turn on top of the current model and scored. A candidate is adopted only when
 1. the current residual exceeds the noise (χ² test at level ``alpha``),
 2. it improves the fit beyond what its extra parameters buy by chance (nested F-test at
    level ``alpha``, and a lower AICc),
-3. its parameter is significant (|value / standard error| ≥ ``min_t``) and physically
+3. its parameter is significant (|value / standard error| ≥ ``min_t``; or, for several that
+   vanish together, jointly: a Wald test at the level 2Φ(−``min_t``)) and physically
    plausible (inside its bounds, not pinned to a search limit), and
 4. it has its own evidence where it needs some: split pairs for a lumped mass, an
    unexplained n = 1 mode in the cavity band for the air cavity.
@@ -102,7 +103,8 @@ def usable_modes(rows, opt: DiagnoseOptions, *, min_confidence: float = 0.5, sou
     left out, and those of them that fit no structural (n, branch) (the evidence of an air
     cavity or an alias). No usable mode: DataFormatError (its message from ``on_empty()``
     when given)."""
-    modes, skipped = modes_from_rows(rows, min_confidence=min_confidence, split_pairs="members", source=source)
+    modes, skipped = modes_from_rows(rows, min_confidence=min_confidence, split_pairs="members", source=source,
+                                     free_rim=opt.rim == "free")
     if not modes:
         raise DataFormatError(on_empty() if on_empty else
                               "no usable modes: a diagnosis needs modes with n and branch (same/opposite)")

@@ -25,7 +25,8 @@ class DiagnoseOptions:
     free : parameters of the base fit (and of every candidate's refit)
     noise_floor_pct : floor of each mode's relative frequency uncertainty, %
     alpha : level of the residual χ² test and of the candidates' F-tests
-    min_t : smallest |value / standard error| of an adopted effect's parameter
+    min_t : smallest |value / standard error| of an adopted effect's parameter (its level,
+        2Φ(−min_t), is also that of the joint Wald test of parameters that vanish together)
     max_effects : effects adopted on top of one another at most
     candidates : names of the candidates to try (default: every effect and parameter)
     seed, population, generations, tol : the evolutionary search of every fit

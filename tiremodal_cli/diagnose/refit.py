@@ -6,6 +6,7 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.special
 
 from tiremodal_cli.diagnose.options import DiagnoseOptions, fit_options, search_start
 from tiremodal_cli.diagnose.statistics import aicc, f_test_p, weighted_rss
@@ -13,7 +14,8 @@ from tiremodal_cli.tyre.fit import fit
 from tiremodal_cli.tyre.fit_types import FitResult
 from tiremodal_cli.tyre.robust import RobustFit, robust_fit
 
-__all__ = ["Trial", "Scoring", "judge", "testimony", "aligned", "refit_on", "refit_robust", "restrict"]
+__all__ = ["Trial", "Scoring", "judge", "joint_wald_p", "t_level", "testimony", "aligned", "refit_on", "refit_robust",
+           "restrict"]
 
 
 def _param_table(res: FitResult, names) -> dict:
@@ -94,7 +96,13 @@ def judge(cand_fit: FitResult, current: FitResult, modes, scoring: Scoring, *, m
     on_limit = [nm for nm in names if (*bounds[nm], False)[2] and params[nm]["value"] >= bounds[nm][1] * 0.999]
     free_t = [abs(params[nm]["t"]) for nm in names if nm not in on_limit]
     if not on_limit and max(free_t) < opt.min_t:
-        return fields, f"its parameter is not significant (|t| = {max(free_t):.1f} < {opt.min_t})"
+        # several parameters that vanish together (the effect's null) are tested together:
+        # correlated, each |t| may be small while the pair is far from its null
+        p_joint = joint_wald_p(cand_fit, [nm for nm in names if bounds[nm][0] == 0])
+        if p_joint is None or not p_joint < t_level(opt.min_t):
+            return fields, (f"its parameter is not significant (|t| = {max(free_t):.1f} < {opt.min_t}"
+                            + ("" if p_joint is None else f"; jointly Wald p = {p_joint:.2g} ≥ "
+                                                         f"{t_level(opt.min_t):.2g}") + ")")
     for nm in names:
         lo, hi, hard = (*bounds[nm], False)[:3]
         v = params[nm]["value"]
@@ -105,6 +113,32 @@ def judge(cand_fit: FitResult, current: FitResult, modes, scoring: Scoring, *, m
         if vanishing or (v >= hi * 0.999 and not hard):
             return fields, f"{nm} = {v:.4g} sits at a limit of its search range [{lo:.3g}, {hi:.3g}]"
     return fields, None
+
+
+def t_level(min_t: float) -> float:
+    """The two-sided level of the rule |t| ≥ ``min_t`` for one parameter: 2 Φ(−min_t)
+    (0.0027 for 3)."""
+    return float(scipy.special.erfc(min_t / np.sqrt(2.0)))
+
+
+def joint_wald_p(res: FitResult, names) -> float | None:
+    """The Wald test that the parameters ``names`` of the fit ``res`` are all zero (their
+    null: the model without the effect), or None for fewer than two.
+
+    W = θᵀ C⁻¹ θ, C their covariance (from the fit's covariance of the log parameters,
+    C = D C_log D, D = diag θ: so W = 1ᵀ C_log⁻¹ 1), against χ² with as many degrees of
+    freedom as parameters (Seber & Wild 1989, §5.3). For one parameter W = t²: the test is
+    |t| ≥ z at level 2Φ(−z), which is what :func:`t_level` gives. Correlated parameters
+    (a Timoshenko tread's ρI and shear compliance) may each have |t| ≈ 1 while W is large:
+    the fit cannot say which of them, but it can say that not both vanish.
+    """
+    if len(names) < 2:
+        return None
+    idx = [res.free.index(nm) for nm in names]
+    C = np.asarray(res.covariance_log, dtype=float)[np.ix_(idx, idx)]
+    one = np.ones(len(idx))
+    W = float(one @ np.linalg.pinv(C, rcond=1e-12) @ one)
+    return float(scipy.special.chdtrc(len(idx), W))
 
 
 def testimony(current: RobustFit) -> list:

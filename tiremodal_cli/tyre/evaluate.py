@@ -131,4 +131,5 @@ class Evaluator:
         out = F[:, np.arange(self.ns.size), self.col]
         if self.base.m_w is None or not np.any(self.ns == 1):
             return out
-        return nearer_rim_mode(out, self.ns, self.br, self.f_meas, F[:, np.argmax(self.ns == 1), 3])
+        i1 = np.argmax(self.ns == 1)
+        return nearer_rim_mode(out, self.ns, self.br, self.f_meas, F[:, i1, 3], F[:, i1, :2])

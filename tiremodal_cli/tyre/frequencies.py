@@ -139,30 +139,38 @@ def rim_mode_hz(p: TyreParameters, effects=()) -> float:
     return float(min(f)) if f else float("nan")
 
 
-def nearer_rim_mode(out, ns, br, meas_hz, f_rim):
-    """A measured n = 1 "same" mode matched to the model's rim mode where that is nearer
-    (in frequency ratio) than the model's same-direction mode.
+def nearer_rim_mode(out, ns, br, meas_hz, f_rim, n1=None):
+    """A measured n = 1 mode matched to the nearest (in frequency ratio) of the model's
+    n = 1 modes of a free rim, whatever its branch label.
 
     The modal stage names a branch by the sign of the tread's and the sidewall's motion;
     in the rim mode of a free rim they move in phase, so a measured rim mode reads as
     n = 1 "same". The model labels that mode "rim" (its rim holds the largest share of the
-    kinetic energy): either model mode is what a measured n = 1 "same" can be, and the
-    one it is is the nearer (the rule of an unlabelled split-pair member). ``out`` (k,)
-    or (S, k); ``f_rim`` scalar or (S,). Without measured frequencies or a rim: ``out``.
+    kinetic energy). With a free rim the n = 1 block has three structural modes (rim, same,
+    opposite) whose shapes the rim's motion mixes, so a label read from the sign of two
+    motions does not tell them apart: a measured n = 1 mode is the model mode nearest it
+    (the rule of an unlabelled split-pair member). ``out`` (k,) or (S, k); ``f_rim`` scalar
+    or (S,); ``n1``: the model's n = 1 same and opposite frequencies, (2,) or (S, 2) (None:
+    a "same" row between same and rim only). Without measured frequencies or a rim: ``out``.
     """
     if meas_hz is None:
         return out
-    rows = (np.asarray(ns) == 1) & (np.asarray(br) == "same")
+    ns, br = np.asarray(ns), np.asarray(br)
+    rows = (ns == 1) & ((br == "same") if n1 is None else np.isin(br, ("same", "opposite")))
     f_rim = np.asarray(f_rim, dtype=float)
     if not rows.any() or not np.any(np.isfinite(f_rim)):
         return out
     out = np.array(out, dtype=float)
     f_m = np.asarray(meas_hz, dtype=float)[rows]
-    same = out[..., rows]
-    rim = np.broadcast_to(f_rim[..., None], same.shape) if f_rim.ndim else np.full(same.shape, float(f_rim))
+    cands = [out[..., rows], np.broadcast_to(f_rim[..., None], out[..., rows].shape)]
+    if n1 is not None:
+        n1 = np.asarray(n1, dtype=float)
+        cands += [np.broadcast_to(n1[..., j:j + 1], out[..., rows].shape) for j in range(2)]
+    C = np.stack(cands, axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        use = np.isfinite(rim) & ~(np.abs(np.log(same / f_m)) <= np.abs(np.log(rim / f_m)))
-    out[..., rows] = np.where(use, rim, same)
+        d = np.where(np.isfinite(C) & (C > 0), np.abs(np.log(C / f_m[..., None])), np.inf)
+    pick = np.argmin(d, axis=-1)  # ties: the row's own branch (index 0) first
+    out[..., rows] = np.take_along_axis(C, pick[..., None], -1)[..., 0]
     return out
 
 
@@ -207,7 +215,7 @@ def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=Non
             for i in np.flatnonzero((ns == 1) & ~cavity):
                 sel = (m.n == 1) & (np.array(m.branch) == br[i]) & (np.array(m.harmonic) == "cos")
                 out[i] = m.freq_hz[sel][0] if sel.any() else np.nan
-        return nearer_rim_mode(out, ns, br, meas_hz, rim_mode_hz(p, eff))
+        return nearer_rim_mode(out, ns, br, meas_hz, rim_mode_hz(p, eff), _n1(p, eff, ns))
     if not any(e.couple is not None for e, _ in eff):
         bf = branch_frequencies(ns, p, eff)
         out = np.where(br == "opposite", bf[:, 1], bf[:, 0])
@@ -215,8 +223,15 @@ def model_frequencies(p: TyreParameters, ns, branches, effects=None, members=Non
             m = solve_modes(p, n_max=1, effects=eff)
             fc = m.freq_hz[np.array(m.branch) == "cavity"]
             out[cavity] = fc.min() if fc.size else np.nan
-        return nearer_rim_mode(out, ns, br, meas_hz, rim_mode_hz(p, eff))
+        return nearer_rim_mode(out, ns, br, meas_hz, rim_mode_hz(p, eff), _n1(p, eff, ns))
     return _coupled_frequencies(p, ns, br, eff, members, meas_hz)
+
+
+def _n1(p: TyreParameters, eff, ns):
+    """The model's n = 1 same and opposite frequencies (Hz, (2,)) of a free rim, or None."""
+    if p.m_w is None or not np.any(np.asarray(ns) == 1):
+        return None
+    return branch_frequencies(np.array([1]), p, eff)[0]
 
 
 def _coupled_frequencies(p, ns, br, eff, members, meas_hz) -> np.ndarray:

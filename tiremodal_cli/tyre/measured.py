@@ -33,7 +33,8 @@ class MeasuredMode:
 
 
 def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
-                    source: str = "", split_pairs: str = "mean") -> tuple[list[MeasuredMode], list[dict]]:
+                    source: str = "", split_pairs: str = "mean", free_rim: bool = False
+                    ) -> tuple[list[MeasuredMode], list[dict]]:
     """Measured modes usable for a fit, from table rows (``lsce`` JSON/CSV or a Table A1 CSV).
 
     Matching rules (docs/identify.md): a row needs ``frequency_hz`` > 0, an integer ``n`` ≥ 0
@@ -41,7 +42,8 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
     are left out, and so are rows with ``mpc`` below ``min_mpc`` (not a normal mode) and rows
     flagged out of their branch's dispersion order (``in_order`` false, from lsce; not n = 0,
     the breathing mode, which a hoop stiffness the beam lacks may put far above the low
-    orders: the fit's outlier screen judges it); the two
+    orders: the fit's outlier screen judges it — and, with ``free_rim``, not n = 1 "same",
+    which a free rim's own mode reads as, off the tread's dispersion); the two
     members of a split pair (one n and branch twice, within 5 %) enter as their mean
     frequency (``split_pairs="mean"``) or as two modes marked ``member`` "lower" and
     "upper" (``split_pairs="members"``, for ``diagnose``); of one n and branch twice
@@ -50,7 +52,7 @@ def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
     Returns the modes and the rows left out with their reasons (each with its ``row``
     number, ``frequency_hz``, and ``n``/``branch`` where the row has them).
     """
-    kept, skipped = _parse_rows(rows, min_confidence, min_mpc)
+    kept, skipped = _parse_rows(rows, min_confidence, min_mpc, free_rim)
     modes = []
     for (n, b), vals in sorted(kept.items(), key=lambda kv: np.mean([v[0] for v in kv[1]])):
         if len(vals) > 1:
@@ -81,7 +83,7 @@ def _rim_candidate(n, b, first, far):
     return max(below, key=lambda v: v[3]) if below else None
 
 
-def _parse_rows(rows, min_confidence, min_mpc):
+def _parse_rows(rows, min_confidence, min_mpc, free_rim=False):
     """The usable rows by (n, branch), each as (f, ζ, σ_f, significance, row number,
     aliased), and the rows left out with their reasons."""
     kept, skipped = {}, []
@@ -104,7 +106,7 @@ def _parse_rows(rows, min_confidence, min_mpc):
             skipped.append({"row": i + 1, "frequency_hz": f, "reason": f"n={n!r} is not an integer"})
             continue
         b = str(b).strip().lower()
-        problem = _row_problem(get, n, b, f, min_confidence, min_mpc)
+        problem = _row_problem(get, n, b, f, min_confidence, min_mpc, free_rim)
         if problem:
             skipped.append({"row": i + 1, "frequency_hz": f, "n": n, "branch": b, "reason": problem})
             continue
@@ -137,7 +139,7 @@ def _modes_of(n, b, vals, split_pairs, source) -> list[MeasuredMode]:
 WEAK_SIGNIFICANCE = 0.05
 
 
-def _row_problem(get, n, b, f, min_confidence, min_mpc) -> str | None:
+def _row_problem(get, n, b, f, min_confidence, min_mpc, free_rim=False) -> str | None:
     """Why a table row cannot enter the fit (None when it can)."""
     conf, order_ok, mpc = get("n_confidence"), get("in_order"), get("mpc")
     if b not in BRANCHES or n < 0 or not f > 0:
@@ -152,11 +154,13 @@ def _row_problem(get, n, b, f, min_confidence, min_mpc) -> str | None:
         return f"significance {float(sig):.3f} < {WEAK_SIGNIFICANCE}: its order is read from a weak shape"
     if conf is not None and float(conf) < min_confidence:
         return f"n_confidence {float(conf):.2f} < {min_confidence}"
-    if order_ok is not None and str(order_ok).strip().lower() in ("false", "0") and n != 0:
+    rim_mode = n == 1 and b == "same" and free_rim
+    if order_ok is not None and str(order_ok).strip().lower() in ("false", "0") and n != 0 and not rim_mode:
         # n = 0 is not on its branch's dispersion: the breathing mode is held by the belt's
         # hoop stiffness (and the cavity air's uniform pressure), absent from the beam, and
         # may lie far above the low orders; the fit's outlier screen judges it, and a
-        # candidate (the extensible belt) may bring it back
+        # candidate (the extensible belt) may bring it back. Nor is a free rim's own mode,
+        # which reads as n = 1 "same" (tread and sidewall in phase)
         return f"n={n} {b} out of its branch's dispersion order"
     if mpc is not None and float(mpc) < min_mpc:
         return f"mpc {float(mpc):.2f} < {min_mpc}: not a normal mode"
