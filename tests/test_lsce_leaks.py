@@ -78,3 +78,31 @@ def test_leaks_dropped_are_no_modes_of_the_tyre(ring_rim):
         assert np.min(np.abs(truth / f - 1)) > TOLERANCE, f
     assert rec["spurious"] <= 0.05 * rec["adopted"], rec["spurious_hz"]
     assert rec["found"] >= 0.9 * rec["expected"]
+
+
+def _group_mode(f_hz, group, std_hz, sig=0.008, peak=0.05, noise=0.01, zeta=0.038):
+    """A GroupMode of the paper's sidewall same-direction crowd (ζ ≈ 3.8 %) whose group's
+    data accept any pole (a swap cost of 0: a residual of misfit, as seen there)."""
+    from tiremodal_cli.modal.merge import GroupMode
+    s = complex(-zeta * 2 * np.pi * f_hz, 2 * np.pi * f_hz * np.sqrt(1 - zeta**2))
+    theta = 2 * np.pi * np.arange(34) / 34
+    return GroupMode(s, group, np.cos(group * theta).astype(complex), sig, std_hz, lambda pole: 0.0, 0.06,
+                     noise, peak)
+
+
+@pytest.mark.parametrize("change, n_modes", [
+    ({}, 2),                          # each pinned, on a peak of its own, weak, 4.5 Hz apart: two modes
+    ({"std_hz": 0.6}, 1),             # one wanders over more than a line: the swap test judges (one pole)
+    ({"peak": 0.02}, 1),              # one under 3 × its group's residual: the swap test judges
+    ({"sig": 0.3}, 1),                # one strong: its swap test has the power to judge
+    ({"f_hz": 280.5}, 1),             # within a line (0.5 Hz) of the other: the FRFs cannot tell them
+])
+def test_weak_poles_pinned_apart_are_two_modes(change, n_modes):
+    """The merge's pinned-apart rule (docs/lsce.md, "Across order groups"): two weak poles of
+    different order groups that each stand on a peak of their own, pinned within a line
+    over the model orders, more than a line and 3 × their scatter apart, are two modes
+    even where the swap test would take them for one; each condition is necessary."""
+    from tiremodal_cli.modal.merge import merge_groups
+    other = dict(f_hz=284.67, group=8, std_hz=0.21) | change
+    merged = merge_groups([_group_mode(280.16, 7, 0.15), _group_mode(**other)], line_hz=0.5)
+    assert len(merged) == n_modes

@@ -158,7 +158,7 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     if spatial and grid_points(point_angle) > len(point_angle):  # points missing: every order leaks
         found, copies = leak_copies(found, leakage(point_angle))
         rejected += copies
-    modes = merge_groups(found)
+    modes = merge_groups(found, line_hz=band.freq[1] - band.freq[0], min_significance=opt.min_significance)
     if not (spatial and grid_points(point_angle) > len(point_angle)):  # (with gaps: leak_copies only)
         modes, unseen = under_residual(modes, band.freq[1] - band.freq[0], band.Hb.shape[0], opt.min_significance)
         rejected += unseen
