@@ -243,8 +243,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1268 / 1334 (95 %) | 21 / 1630 (1.3 %) | 0 | 14 / 14 | 11 / 14 | |
 | 2026-11-23, end of session 8 | a weak mode on a peak of its own judged against the noise (#14); an unexplained cavity-band mode in the χ² and the cavity's own round, a mass's split must be reproduced, the rim mass's profile (#15); scipy.fft in the FRF stage (#19) | paper | 1135 / 1212 (94 %) | 30 / 1431 (2.1 %) | 0 | 14 / 14 | 11 / 13 | 3.1 min |
 | | | ring | 1276 / 1334 (96 %) | 21 / 1639 (1.3 %) | 0 | 14 / 14 | 12 / 14 | |
-| 2026-11-24, end of session 9 | a weak leak of a stronger mode of another order group dropped, the points taken in the order of their angles (#14); detectability on the modes a test shows, aliased orders re-read in the base fit, the rim mass on its ridge, vanishing parameters on their bound (#15, #19); new machine: the same f4b04e5 gave paper 29 / 1429, ring 23 / 1639 spurious here | paper | 1135 / 1212 (94 %) | 28 / 1427 (2.0 %) | 0 | 14 / 14 | 13 / 13 | 2.2 min |
-| | | ring | 1276 / 1334 (96 %) | 18 / 1631 (1.1 %) | 0 | 14 / 14 | 13 / 14 | |
+| 2026-11-24, end of session 9 | a weak leak of a stronger mode of another order group dropped, weak pinned modes kept beside a stronger one, the points taken in the order of their angles, an unreadable mode read on the other branch (#14); detectability on the modes a test shows, aliased orders re-read in the base fit, a nested Timoshenko with a joint test, a free rim's n = 1 modes matched to the nearest, the rim mass on its ridge, vanishing parameters on their bound (#15, #19); new machine: the same f4b04e5 gave paper 29 / 1429, ring 23 / 1639 spurious here | paper | 1143 / 1212 (94 %) | 29 / 1435 (2.0 %) | 0 | 14 / 14 | 13 / 13 | 2.2 min |
+| | | ring | 1277 / 1334 (96 %) | 18 / 1632 (1.1 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
