@@ -201,7 +201,9 @@ its peak accelerance at its best channel and point is at least 3 × the H1 noise
 no alias of its order (n' ≡ ±n mod N) on its branch lies within one half-power bandwidth
 (a degenerate cos/sin pair is one mode). It is *found* when the modal table has a mode
 within 0.3 % with the right n and branch (orders above N/2: flagged aliased; cavity and
-tangential modes, which the tool has no label for: any label), *mislabelled* when only the
+tangential modes, which the tool has no label for: any label; a free rim's "rim" mode: n = 1, not aliased,
+either branch — the generators' "rim" label is the rim's share of the kinetic energy, which a test
+cannot measure without the masses), *mislabelled* when only the
 frequency matches, *missed* otherwise. A table mode with no truth mode of any kind within
 0.3 % is *spurious*; table modes within 0.3 % of a truth mode that a one-to-one matching of
 table to truth leaves over are *surplus* (one mode reported twice). The diagnosis is *right*

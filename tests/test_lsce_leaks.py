@@ -9,7 +9,7 @@ import pytest
 
 from tiremodal_cli.modal.merge import MergedMode, under_residual
 from tiremodal_cli.workflow.validation import matrix, run_case
-from tiremodal_cli.workflow.validation_scoring import TOLERANCE
+from tiremodal_cli.workflow.validation_scoring import TOLERANCE, read_modes
 
 LINE_HZ = 0.5
 
@@ -50,8 +50,8 @@ def test_a_weak_unpinned_pole_in_a_stronger_modes_band_is_its_leak(change, dropp
 
 @pytest.fixture(scope="module")
 def ring_rim(tmp_path_factory):
-    """The validation matrix's ring with a free rim through ``run`` (seeded), its modal
-    file's rejections and the generator's truth."""
+    """The validation matrix's ring with a free rim through ``run`` (seeded): its record, its
+    modal file's rejections, the generator's truth modes and the modal table."""
     import h5py
 
     from tiremodal_cli.tyre.simulate import simulate
@@ -61,8 +61,8 @@ def ring_rim(tmp_path_factory):
     rec = run_case(case, folder)
     with h5py.File(folder / "run" / "modal.h5") as f:
         rejected = json.loads(f.attrs["rejected"])
-    truth = np.array([m["frequency_hz"] for m in simulate(config_for(case)).truth["modes"]])
-    return rec, rejected, truth
+    modes = simulate(config_for(case)).truth["modes"]
+    return rec, rejected, modes, read_modes(folder / "run" / "modes.csv")
 
 
 def test_leaks_dropped_are_no_modes_of_the_tyre(ring_rim):
@@ -70,7 +70,8 @@ def test_leaks_dropped_are_no_modes_of_the_tyre(ring_rim):
     truth mode of the generator (it drops some: on main the weak pole at 478.75 Hz in
     group 10, beside the opposite n = 19 at 483.8 Hz, was adopted), and the spurious modes
     are at most 5 % of those adopted (4 of 61 on main)."""
-    rec, rejected, truth = ring_rim
+    rec, rejected, modes, _ = ring_rim
+    truth = np.array([m["frequency_hz"] for m in modes])
     assert rec["status"] == "ok"
     leaks = [r["frequency_hz"] for r in rejected if r["reason"].startswith("a leak of")]
     assert leaks
@@ -78,6 +79,20 @@ def test_leaks_dropped_are_no_modes_of_the_tyre(ring_rim):
         assert np.min(np.abs(truth / f - 1)) > TOLERANCE, f
     assert rec["spurious"] <= 0.05 * rec["adopted"], rec["spurious_hz"]
     assert rec["found"] >= 0.9 * rec["expected"]
+
+
+def test_a_free_rims_n1_modes_are_read_as_n1_not_as_aliases(ring_rim):
+    """A free rim adds a mode to the tyre's n = 1 modes (the generator's two "rim" modes of
+    the ring on its fixture, 24.4 and 78.9 Hz, both below the n = 0 mode): each is read as
+    n = 1, not as an alias of the 34-point grid (on main before session 10 the second was
+    n = 33, aliased — the rule "each order appears once per branch")."""
+    _, _, modes, table = ring_rim
+    rim_hz = sorted({round(m["frequency_hz"], 1) for m in modes if m["branch"] == "rim"})  # cos/sin pairs
+    assert len(rim_hz) == 2
+    for f in rim_hz:
+        rows = [r for r in table if abs(r["frequency_hz"] / f - 1) <= TOLERANCE]
+        assert rows, f
+        assert any(r["n"] == 1 and not r["aliased"] for r in rows), (f, rows)
 
 
 def _group_mode(f_hz, group, std_hz, sig=0.008, peak=0.05, noise=0.01, zeta=0.038):

@@ -68,6 +68,22 @@ def test_counting_rules():
     assert (s["found"], s["missed"], s["mislabelled"]) == (2, 2, 0)
 
 
+@pytest.mark.parametrize("n, branch, aliased, status", [
+    (1, "same", False, "found"),          # the rim's order, read on either branch
+    (1, "opposite", False, "found"),
+    (33, "same", True, "mislabelled"),    # its order misread as an alias of the grid
+    (2, "same", False, "mislabelled"),
+])
+def test_a_free_rims_mode_is_found_by_its_order_on_either_branch(n, branch, aliased, status):
+    """The generators' "rim" label (the rim's share of the kinetic energy) cannot be read
+    from a test without the masses; the order can."""
+    g = {"frequency_hz": 78.9, "n": 1, "branch": "rim", "zeta": 0.02, "expected": True, "aliased": False,
+         "foreign": False, "valid": True, "crowd": False}
+    row = {"frequency_hz": 78.95, "damping_ratio": 0.02, "n": n, "branch": branch, "aliased": aliased}
+    s = score_modes([g], [row], [{"frequency_hz": 78.9}])
+    assert s["detail"][0]["status"].startswith(status)
+
+
 def test_matrix_covers_every_level_of_every_factor():
     cases = matrix()
     for g in ("ring", "paper"):

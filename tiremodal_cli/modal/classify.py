@@ -14,7 +14,9 @@
   own (n = 0, the breathing mode, is out of the branch's order whenever the belt's
   extension or a tangential stiffness lifts it). A spatial order that a clear mode of the
   branch holds more than 5 % lower (farther than a split pair) is an alias even before the
-  mark reaches ⌊N/2⌋: each order appears once per branch. Only clear modes (both
+  mark reaches ⌊N/2⌋: each order appears once per branch — except n = 1 with a free rim
+  (a live rim channel), which adds the rim's mode to the tyre's n = 1 modes: there a third
+  n = 1 reading of a branch is the first alias. Only clear modes (both
   confidences ≥ 0.5, significance ≥ 0.3) move the mark; a mode clear only in its own order
   group moves it by continuing the branch (at most two orders up).
 * **confidences**: ``n_confidence`` is the winning order's energy share; the branch's is
@@ -108,6 +110,7 @@ class _Modes:
     n_points: int
     significance: np.ndarray | None
     significance_group: np.ndarray | None
+    free_rim: bool = False
 
     def clear(self, r: int) -> bool:
         """Both confidences ≥ 0.5 and (when known) significance ≥ 0.3."""
@@ -139,7 +142,8 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     isw = locs.index("sidewall") if "sidewall" in locs else None
     n_p = grid_points(point_angle)  # points failed on a uniform grid alias as the whole grid
     reads = [_read(shapes[r], it, isw, point_angle) for r in range(len(freq_hz))]
-    ns = _resolve_aliases(_Modes(freq_hz, reads, n_p, significance, significance_group))
+    free_rim = _free_rim(shapes, locs)
+    ns = _resolve_aliases(_Modes(freq_hz, reads, n_p, significance, significance_group, free_rim))
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
     reads = _partners_branches(freq_hz, reads, ns)
     reads = _other_branch(freq_hz, reads, ns, in_order, n_p)
@@ -158,6 +162,15 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
                                   splitting_hz=pairs[r][1], in_order=bool(in_order[r]), crowd=bool(cands),
                                   n_candidates=tuple(cands)))
     return res
+
+
+def _free_rim(shapes, locs) -> bool:
+    """Whether a rim channel recorded the modes (a live rim channel: a free rim). A dead
+    channel's residues are NaN (the FRF stage's null); a rim clamped to a rigid fixture
+    records nothing."""
+    rim = [c for c, loc in enumerate(locs) if loc == "rim"]
+    sh = np.asarray(shapes)
+    return bool(rim) and sh.size > 0 and any(np.all(np.isfinite(sh[:, c])) and np.any(sh[:, c] != 0) for c in rim)
 
 
 def _read(shape, it: int, isw: int | None, point_angle) -> _Reading:
@@ -201,6 +214,12 @@ def _walk_branch(m: _Modes, idx: list[int], ns: list[int]) -> None:
         # (each order appears once per branch)
         seen = [q for q in idx[:i] if reads[q].n_spatial == n]
         far = any(f[r] - f[q] > 0.05 * f[r] and m.clear(q) for q in seen)
+        if n == 1 and m.free_rim:
+            # a free rim adds one n = 1 mode (the rim on the tyre's stiffness) to the tyre's
+            # two: n = 1 may appear twice on a branch before an alias is read (a split pair,
+            # within 5 %, counts once)
+            lower = sorted(f[q] for q in seen if f[r] - f[q] > 0.05 * f[r] and m.clear(q))
+            far = 1 + sum(b - a > 0.05 * b for a, b in zip(lower, lower[1:])) >= 2 if lower else False
         if (n < top and top >= n_top - 1 and seen) or far:
             alias = _smallest_alias_from(reads[r].n_spatial, top, m.n_points)
             n = n if alias is None else alias

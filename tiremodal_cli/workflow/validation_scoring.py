@@ -16,6 +16,14 @@ What a test *could* show:
   (different orders are told apart by the circumferential decomposition, aliases are not);
 * a degenerate cos/sin pair (or a pair split by less than ζ f) is one mode.
 
+A free rim's n = 1 modes: both generators call a mode "rim" when the rim holds the largest
+share of its kinetic energy — a share a test cannot measure without the masses (the rim
+mode and the tyre's n = 1 "same" mode of a free rim both move tread, sidewall and rim in
+phase; the two generators label the second one differently). The tool has no "rim"
+branch: a truth "rim" mode is found by a table mode of its order n = 1, not aliased, of
+either branch (as cavity and tangential modes, which the tool has no label for, are
+found by any label).
+
 A mode a test could show is *found*, *mislabelled* or *missed* by ``run``'s modal table
 (:func:`score_modes`); a diagnosis is right when it adopts what the case holds, or nothing
 where the base model absorbs the case's physics within the noise (:func:`detectable`).
@@ -160,6 +168,8 @@ def score_modes(groups: list[dict], rows: list[dict], truth_modes: list[dict]) -
         cand = [r for r in rows if abs(r["frequency_hz"] / g["frequency_hz"] - 1) <= TOLERANCE]
         if g["foreign"]:
             ok = [r for r in cand]
+        elif g["branch"] == "rim":  # the rim mode of a free rim: its order, any branch (module docstring)
+            ok = [r for r in cand if r["n"] == g["n"] and not r["aliased"]]
         elif g["aliased"]:
             ok = [r for r in cand if r["aliased"]]
         else:
