@@ -7,12 +7,13 @@ For every spurious row of a kept case (``benchmarks/spurious.py``: no truth mode
 0.3 %), the modal stage is run again on the kept ``run/frf.h5`` over the kept band (the
 same table to the bit: the stage is deterministic) and the adopted mode's quantities are
 printed against the conditions of :func:`tiremodal_cli.modal.merge.under_residual` — (a)
-physical share < ``min_significance``, (b) peak in its group < ``PEAK_OVER_NOISE`` × the
-group's residual RMS, (c) frequency scatter over the model orders > one line, (d) a mode
-of another group with a larger peak within that mode's half-power half-width, (e) the
-channel MAC with the strongest of those ≥ 0.9 — with ``-`` where a condition fails (what
-keeps the mode), the classifier's ``in_order`` and, for its group's data, the swap cost
-2ΔE/2 (:func:`~tiremodal_cli.modal.merge.swap_cost`) of the nearest stronger pole of another
+physical share < ``min_significance``, (c) frequency scatter over the model orders > one
+line, (d) a mode of another group with a larger peak within that mode's half-power
+half-width, (e) the channel MAC with the strongest of those ≥ 0.9 — with ``-`` where a
+condition fails (what keeps the mode), its peak against its group's residual RMS (the
+own-peak rule's (b), ``PEAK_OVER_NOISE``), the classifier's ``in_order`` and, for its
+group's data, the swap cost
+ΔE (:func:`~tiremodal_cli.modal.merge.swap_cost`) of the nearest stronger pole of another
 group (what keeps it apart in the merge: above the χ²(2)/2 quantile 6.9).
 """
 
@@ -62,15 +63,14 @@ def rerun(run: Path):
 
 
 def conditions(m, modes, found, line_hz: float, n_ch: int, min_significance: float = 0.05) -> str:
-    """One line: the merged mode ``m`` against (a)–(e) of ``under_residual`` and its merge's swap cost."""
+    """One line: the merged mode ``m`` against (a), (c)–(e) of ``under_residual`` and its merge's swap cost."""
     fn, zeta = poles_to_modal(np.array([o.pole for o in modes]))
     j = next(k for k, o in enumerate(modes) if o is m)
     over = [i for i, o in enumerate(modes) if o.group != m.group and o.peak > m.peak
             and abs(fn[j] - fn[i]) <= zeta[i] * fn[i]]
     mac = channel_mac(modes[max(over, key=lambda i: modes[i].peak)].residues, m.residues, n_ch) if over else np.nan
-    flags = [m.significance < min_significance, m.peak < PEAK_OVER_NOISE * m.group_noise,
-             m.frequency_std_hz > line_hz, bool(over), mac >= 0.9]
-    txt = " ".join(c if ok else "-" for c, ok in zip("abcde", flags))
+    flags = [m.significance < min_significance, m.frequency_std_hz > line_hz, bool(over), mac >= 0.9]
+    txt = " ".join(c if ok else "-" for c, ok in zip("acde", flags))
     own = next(g for g in found if g.pole == m.pole and g.group == m.group)
     others = [g for g in found if g.group != m.group and g.peak > m.peak]
     swap = ""
@@ -78,7 +78,9 @@ def conditions(m, modes, found, line_hz: float, n_ch: int, min_significance: flo
         near = min(others, key=lambda g: abs(g.pole.imag - m.pole.imag))
         f_near = poles_to_modal(np.array([near.pole]))[0][0]
         swap = f" swap vs {f_near:.2f} Hz (group {near.group}): {own.swap_cost(near.pole):.1f}"
-    return (f"[{txt}] share {m.significance:.3f}, peak/residual {m.peak / max(m.group_noise, 1e-300):.2f}, "
+    above = m.peak >= PEAK_OVER_NOISE * m.group_noise
+    return (f"[{txt}] share {m.significance:.3f}, peak/residual {m.peak / max(m.group_noise, 1e-300):.2f}"
+            f"{' (above ' + format(PEAK_OVER_NOISE, 'g') + ')' if above else ''}, "
             f"scatter {m.frequency_std_hz:.2f} Hz (line {line_hz:.3g}), MAC {mac:.3f}, groups "
             f"{sorted(m.order_energy)}{swap}")
 
