@@ -182,8 +182,8 @@ def _pinned_apart(a: GroupMode, b: GroupMode, fa: float, fb: float, line_hz: flo
     quantile 6.9). A strong mode's swap test has the power, and judges (without (a) the
     rule lost a mode of the ring's 5-hit case and turned the paper's tangential + added
     mass diagnosis wrong: docs/lsce.md); a leak the swap test is there to merge stays under its
-    group's noise floor or wanders over the model orders (:func:`under_residual`'s (b)
-    and (c); seen: a pinned leak of the ring's opposite n = 18 with a free rim, 3.8 Hz
+    group's noise floor or wanders over the model orders (the own-peak rule's (b) and
+    (c); seen: a pinned leak of the ring's opposite n = 18 with a free rim, 3.8 Hz
     above it, at 1.6 × its group's residual).
     """
     if line_hz <= 0 or any(m.frequency_std_hz > line_hz or m.peak < PEAK_OVER_NOISE * m.group_noise
