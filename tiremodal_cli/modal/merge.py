@@ -62,6 +62,7 @@ class MergedMode:
     frequency_std_hz: float
     peak: float = 0.0
     group_noise: float = 0.0
+    swap_cost: Callable | None = None  # the dominant group's :attr:`GroupMode.swap_cost`
 
 
 #: probability that one pole seen in two order groups is taken for two modes: the swap test
@@ -157,7 +158,7 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
         out.append(MergedMode(found[i].pole, found[i].group, phys, found[i].significance,
                               {int(found[j].group): float(energy[j] / tot) for j in groups_seen.values()},
                               found[i].significance_in_group, found[i].frequency_std_hz, found[i].peak,
-                              found[i].group_noise))
+                              found[i].group_noise, found[i].swap_cost))
     out.sort(key=lambda m: abs(m.pole))
     return out
 
@@ -181,8 +182,8 @@ def _pinned_apart(a: GroupMode, b: GroupMode, fa: float, fb: float, line_hz: flo
     quantile 6.9). A strong mode's swap test has the power, and judges (without (a) the
     rule lost a mode of the ring's 5-hit case and turned the paper's tangential + added
     mass diagnosis wrong: docs/lsce.md); a leak the swap test is there to merge stays under its
-    group's noise floor or wanders over the model orders (:func:`under_residual`'s (b)
-    and (c); seen: a pinned leak of the ring's opposite n = 18 with a free rim, 3.8 Hz
+    group's noise floor or wanders over the model orders (the own-peak rule's (b) and
+    (c); seen: a pinned leak of the ring's opposite n = 18 with a free rim, 3.8 Hz
     above it, at 1.6 × its group's residual).
     """
     if line_hz <= 0 or any(m.frequency_std_hz > line_hz or m.peak < PEAK_OVER_NOISE * m.group_noise
@@ -192,28 +193,32 @@ def _pinned_apart(a: GroupMode, b: GroupMode, fa: float, fb: float, line_hz: flo
 
 
 def under_residual(modes: list[MergedMode], line_hz: float, n_channels: int, min_significance: float = 0.05,
-                   ratio: float = PEAK_OVER_NOISE, min_mac: float = 0.9) -> tuple[list, list]:
+                   min_mac: float = 0.9) -> tuple[list, list]:
     """Drop the weak leaks of a stronger mode of another order group (docs/lsce.md).
 
     A mode j is a stronger mode i seen in another order, and dropped, when all hold:
     (a) j explains under ``min_significance`` of the physical response in its half-power
-    band (it was kept only for its share within its group); (b) its response at resonance
-    in its group's rows (:attr:`MergedMode.peak`) is under ``ratio``
-    (:data:`~tiremodal_cli.modal.groupfit.PEAK_OVER_NOISE`, 3) × that group's fit residual
-    RMS per line (:attr:`MergedMode.group_noise`; the visibility rule); (c) its pole
-    scatters by more than one line ``line_hz`` over the model orders (the FRFs' resolution,
-    as (c) of :func:`~tiremodal_cli.modal.groupfit.own_peaks`); (d) it lies within ζ_i f_i
-    of a mode of another group with a larger peak (the candidate window of
+    band (it was kept only for its share within its group); (c) its pole scatters by more
+    than one line ``line_hz`` over the model orders (the FRFs' resolution, as (c) of
+    :func:`~tiremodal_cli.modal.groupfit.own_peaks`: the data do not locate it); (d) it lies
+    within ζ_i f_i of a mode of another group with a larger peak (the candidate window of
     :func:`merge_groups`); (e) it and the strongest of those, i, have one pattern at the
     sensors, MAC ≥ ``min_mac`` (0.9, the stabilization's cluster MAC) of their channel
     vectors (:func:`channel_mac`: a roving-hammer residue is φ(c) ψ(p), one φ per physical
     mode in every group). Such a pole is fitted to i's leak into j's group (an added mass
     puts every mode into every order), biased too far from i for the swap test. Each
-    condition keeps real modes: (a) those the physical share supports; (b) a weak mode on a
-    peak of its own; (c) the ring's sidewall same-direction modes pinned under their group's
-    residual; (d) a weak mode alone; (e) a weak mode of the other branch beside a strong one.
-    For a complete grid (or no spatial split): with points missing, every group's residual
-    holds every order's leak (those are judged by :func:`leak_copies`).
+    condition keeps real modes: (a) those the physical share supports; (c) the ring's
+    sidewall same-direction modes and the paper's same-direction crowd pinned under their
+    group's residual; (d) a weak mode alone; (e) a weak mode of the other branch beside a
+    strong one. Until session 10 the rule also asked (b) that j's peak in its group's rows
+    be under 3 × the group's fit residual RMS (:data:`~tiremodal_cli.modal.groupfit.PEAK_OVER_NOISE`);
+    a weak mode on a peak of its own is one both above the noise and pinned (the own-peak
+    rule), and a pole that wanders by several lines over the model orders is located by no
+    peak, however high the leak it is fitted to (the ring's added-mass leaks at 406.72 and
+    708.11 Hz stand 5 × above their group's residual and scatter by 3 and 4.6 lines).
+    Then :func:`_leak_twins`. For a complete grid (or no spatial split): with points
+    missing, every group's residual holds every order's leak (those are judged by
+    :func:`leak_copies`).
 
     Parameters
     ----------
@@ -231,8 +236,7 @@ def under_residual(modes: list[MergedMode], line_hz: float, n_channels: int, min
     for j, m in enumerate(modes):
         over = [i for i, o in enumerate(modes) if o.group != m.group and o.peak > m.peak
                 and abs(fn[j] - fn[i]) <= zeta[i] * fn[i]]
-        if (m.significance >= min_significance or m.peak >= ratio * m.group_noise
-                or not m.frequency_std_hz > line_hz or not over):
+        if m.significance >= min_significance or not m.frequency_std_hz > line_hz or not over:
             kept.append(m)
             continue
         i = max(over, key=lambda i: modes[i].peak)
@@ -242,12 +246,50 @@ def under_residual(modes: list[MergedMode], line_hz: float, n_channels: int, min
             continue
         dropped.append({"frequency_hz": float(fn[j]), "damping_ratio": float(zeta[j]), "group": int(m.group),
                         "reason": f"a leak of the group {modes[i].group} mode at {fn[i]:.2f} Hz: it explains "
-                                  f"{100 * m.significance:.1f} % of the response at its frequency, its response "
-                                  f"{m.peak:.3g} at resonance is under {ratio:g} × its group's fit residual RMS "
-                                  f"{m.group_noise:.3g} and its pole scatters by {m.frequency_std_hz:.2f} Hz over "
-                                  f"the model orders (more than a line, {line_hz:.3g} Hz); MAC of the two modes' "
-                                  f"responses at the sensors {cm:.3f}"})
-    return kept, dropped
+                                  f"{100 * m.significance:.1f} % of the response at its frequency and its pole "
+                                  f"scatters by {m.frequency_std_hz:.2f} Hz over the model orders (more than a "
+                                  f"line, {line_hz:.3g} Hz; its response {m.peak:.3g} at resonance, its group's fit "
+                                  f"residual RMS {m.group_noise:.3g}); MAC of the two modes' responses at the "
+                                  f"sensors {cm:.3f}"})
+    return _leak_twins(kept, dropped, modes, line_hz, min_significance)
+
+
+def _leak_twins(kept: list, dropped: list, modes: list, line_hz: float, min_significance: float,
+                alpha: float = SAME_POLE_ALPHA) -> tuple[list, list]:
+    """Drop a weak mode whose group's data accept the pole of a leak just dropped: the same leak.
+
+    A leak seen in two groups is merged when its group's data accept the other's pole (the
+    swap test), unless the summed shares would turn a normal mode into none (MPC; the copies'
+    patterns at the points need not add in phase); the copy left apart then keeps a sensor
+    pattern mixed by the two orders (seen: the ring's opposite n = 13 with the added mass,
+    331.08 Hz, leaks at 332.77 Hz in group 9, MAC 0.97, dropped, and at 332.45 Hz in group 5,
+    MAC 0.50, whose group accepts the 332.77 Hz pole: ΔE = −17.5; merged, the two shares'
+    MPC would be 0.43). A kept mode m is that leak when (a) and (c) of :func:`under_residual`
+    hold for it and its group's swap test (:func:`swap_cost`, χ²(2)/2 quantile 1 − ``alpha``)
+    accepts a dropped leak's pole within m's half-power half-width.
+    """
+    if not dropped or not kept:
+        return kept, dropped
+    thr = scipy.special.chdtri(2, alpha) / 2
+    gone = [m for m in modes if all(m is not k for k in kept)]
+    fg, _ = poles_to_modal(np.array([m.pole for m in gone]))
+    fk, zk = poles_to_modal(np.array([m.pole for m in kept]))
+    out = []
+    for j, m in enumerate(kept):
+        twin = [q for q, g in enumerate(gone) if g.group != m.group and abs(fg[q] - fk[j]) <= zk[j] * fk[j]]
+        if m.significance < min_significance and m.frequency_std_hz > line_hz and m.swap_cost is not None and twin:
+            q = min(twin, key=lambda q: m.swap_cost(gone[q].pole))
+            cost = m.swap_cost(gone[q].pole)
+            if cost <= thr:
+                dropped.append({"frequency_hz": float(fk[j]), "damping_ratio": float(zk[j]), "group": int(m.group),
+                                "reason": f"the same pole as the leak at {fg[q]:.2f} Hz (group {gone[q].group}) "
+                                          f"dropped: its group's data accept that pole (ΔE = {cost:.1f} ≤ "
+                                          f"{thr:.1f}); it explains {100 * m.significance:.1f} % of the response "
+                                          f"and its pole scatters by {m.frequency_std_hz:.2f} Hz over the model "
+                                          f"orders (more than a line)"})
+                continue
+        out.append(m)
+    return out, dropped
 
 
 def channel_mac(a, b, n_channels: int) -> float:
