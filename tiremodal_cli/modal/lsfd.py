@@ -25,7 +25,7 @@ import scipy.linalg
 
 from tiremodal_cli.conventions import FORM_POWER
 
-__all__ = ["FORM_POWER", "LSFDResult", "lsfd", "synthesize", "mpc", "significance"]
+__all__ = ["FORM_POWER", "LSFDResult", "lsfd", "pole_basis", "synthesize", "mpc", "significance"]
 
 
 
@@ -45,7 +45,9 @@ class LSFDResult:
     error: np.ndarray
 
 
-def _basis(freq_hz, s, q, lower, upper):
+def pole_basis(freq_hz, s, q, lower, upper):
+    """The LSFD columns of poles ``s`` on ``freq_hz`` in form power ``q``: (K, 2 n_modes [+ 1 + 1])
+    complex — Re R and Im R of every mode, then the lower and upper residual terms."""
     jw = 2j * np.pi * np.asarray(freq_hz, dtype=float)[:, None]
     s = np.asarray(s, dtype=complex)[None, :]
     a, b = 1 / (jw - s), 1 / (jw - np.conj(s))
@@ -89,7 +91,7 @@ def lsfd(freq_hz, H, s, *, form: str = "accelerance", lower: bool = True, upper:
     freq_hz = np.asarray(freq_hz, dtype=float)
     H = np.asarray(H)
     n_m = len(s)
-    A = _basis(freq_hz, s, q, lower, upper)
+    A = pole_basis(freq_hz, s, q, lower, upper)
     Ar = np.concatenate([A.real, A.imag], axis=0)
     scale = np.linalg.norm(Ar, axis=0)
     scale[scale == 0] = 1

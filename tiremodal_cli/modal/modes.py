@@ -20,6 +20,7 @@ from tiremodal_cli.errors import DataFormatError, ParameterError
 from tiremodal_cli.frf.windows import correct_poles
 from tiremodal_cli.modal.band import band_or_every_line, default_band, no_stable_mode, order_for_lines
 from tiremodal_cli.modal.classify import classify
+from tiremodal_cli.modal.gaps import cleaned_groups, weak_in_frfs
 from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
 from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
@@ -140,6 +141,30 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     spatial = opt.spatial == "on" or (opt.spatial == "auto" and point_angle is not None
                                       and is_circumferential(point_angle, channel_location))
     groups, group_max, opt = _order_groups(band, point_angle, spatial, opt)
+    gaps = spatial and grid_points(point_angle) > len(point_angle)  # points missing: every order leaks
+    diagrams, modes, rejected, synth = _modes_of_groups(band, groups, point_angle, spatial, gaps, group_max, opt,
+                                                        progress)
+    if gaps:  # once more, each group read with the found modes' leaks taken out (modal.gaps)
+        groups = cleaned_groups(band.freq, band.Hb, point_angle, [m.pole for m in modes],
+                                [set(m.order_energy) for m in modes])
+        diagrams, modes, rejected, synth = _modes_of_groups(band, groups, point_angle, spatial, gaps, group_max,
+                                                            opt, progress)
+    if gaps:
+        modes, weak = weak_in_frfs(modes, opt.min_significance)
+        rejected += weak
+    modes, edge = off_edges(modes, band.freq[0], band.freq[-1], exp_tau_s)
+    if not modes:
+        raise no_stable_mode(band.freq, group_max)
+    meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
+            "max_order": int(group_max), "exp_tau_s": exp_tau_s}
+    return _result(band, H.shape, modes, synth, exp_tau_s, diagrams=diagrams, rejected=rejected + edge, meta=meta)
+
+
+def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool, group_max: int,
+                     opt: ModalOptions, progress):
+    """Every order group swept and fitted, and their modes merged into one per physical pole.
+
+    Returns (diagrams, modes (MergedMode), rejected, the physical synthesis (n_frf, K))."""
     diagrams, found, rejected = [], [], []
     synth = np.zeros(band.flat.shape, dtype=complex)
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
@@ -155,19 +180,14 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
             progress(i + 1, len(groups))
     if not found:
         raise no_stable_mode(band.freq, group_max)
-    if spatial and grid_points(point_angle) > len(point_angle):  # points missing: every order leaks
+    if gaps:
         found, copies = leak_copies(found, leakage(point_angle))
         rejected += copies
     modes = merge_groups(found, line_hz=band.freq[1] - band.freq[0], min_significance=opt.min_significance)
-    if not (spatial and grid_points(point_angle) > len(point_angle)):  # (with gaps: leak_copies only)
+    if not gaps:  # (with gaps: leak_copies only)
         modes, unseen = under_residual(modes, band.freq[1] - band.freq[0], band.Hb.shape[0], opt.min_significance)
         rejected += unseen
-    modes, edge = off_edges(modes, band.freq[0], band.freq[-1], exp_tau_s)
-    if not modes:
-        raise no_stable_mode(band.freq, group_max)
-    meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
-            "max_order": int(group_max), "exp_tau_s": exp_tau_s}
-    return _result(band, H.shape, modes, synth, exp_tau_s, diagrams=diagrams, rejected=rejected + edge, meta=meta)
+    return diagrams, modes, rejected, synth
 
 
 def _live_channels(freq_hz, H) -> np.ndarray:

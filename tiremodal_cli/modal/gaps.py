@@ -1,0 +1,134 @@
+"""Order groups of a grid with missing points, read with the other orders' leaks taken out.
+
+With points missing from a uniform grid the minimum-norm decomposition
+(:func:`~tiremodal_cli.modal.spatial.decompose`) is underdetermined at each line (19 points,
+24 harmonics): every order leaks into every other (:func:`~tiremodal_cli.modal.spatial.leakage`,
+0.2–0.4), and each group's sweep sees the modes of all the others at once — the paper's
+opposite branch above 450 Hz, a dozen modes of different orders within a bandwidth of each
+other, was lost or biased by 0.3–0.5 %. A modal model removes the indeterminacy: a mode of
+order m has the pattern D_m a (the grid's two columns of order m at the points) at every
+line, so the modes found once fix a few unknowns each, over all lines.
+
+:func:`order_lsfd` fits the physical FRFs with the modes found, each mode's residues held
+to the span of the grid's columns of the orders it was found in (one LSFD over all points,
+free residual terms per FRF); :func:`cleaned_groups` then gives each group its own modes'
+coefficients at full size plus the minimum-norm decomposition of what the model leaves
+(the modes not found yet, the noise): the found modes' leaks are gone, and the group's
+sweep sees its own modes and the rest's residual leaks only. On a complete grid the
+decomposition is exact and this is not used.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+
+from tiremodal_cli.conventions import FORM_POWER
+from tiremodal_cli.modal.lsce import poles_to_modal
+from tiremodal_cli.modal.lsfd import pole_basis, synthesize
+from tiremodal_cli.modal.spatial import decompose, grid_design
+
+__all__ = ["order_lsfd", "cleaned_groups", "weak_in_frfs"]
+
+
+def order_lsfd(freq_hz, Hb, angles_rad, poles, orders, form: str = "accelerance") -> np.ndarray:
+    """Residues of the modes on the grid's harmonic coefficients, fitted over every point.
+
+    Model of the FRF of channel c at point p (as :func:`~tiremodal_cli.modal.lsfd.lsfd`):
+    H_cp(ω) = (iω)^q Σ_r [R_cpr / (iω − s_r) + c.c.] + LR_cp (iω)^(q−2) + UR_cp (iω)^q with
+    R_cpr = Σ_k D[p, k] X_rkc over the grid's columns k of the orders of mode r
+    (:func:`~tiremodal_cli.modal.spatial.grid_design`). The lines are reduced once by a QR
+    factorisation of the pole basis (‖Y − A x‖² = ‖Qᵀ Y − R x‖² + const), so the
+    constrained least squares is over n_points × n_basis rows.
+
+    Parameters
+    ----------
+    freq_hz : (K,) Hz ; Hb : (n_channels, n_points, K) complex ; angles_rad : (n_points,)
+    poles : (n_modes,) complex, rad/s ; orders : list of sets of int, each mode's orders
+
+    Returns
+    -------
+    X : (n_modes, n_cols, n_channels) complex — the residue of each mode on each of the
+        grid's columns (zero on the columns of orders it does not hold)
+    """
+    D, names = grid_design(angles_rad)
+    n_c, n_p, K = Hb.shape
+    s = np.asarray(poles, dtype=complex)
+    M = s.size
+    A = pole_basis(freq_hz, s, FORM_POWER[form], True, True)  # (K, 2M + 2)
+    Ar = np.concatenate([A.real, A.imag], axis=0)
+    scale = np.linalg.norm(Ar, axis=0)
+    scale[scale == 0] = 1
+    Q, R = np.linalg.qr(Ar / scale)  # (2K, nb), (nb, nb)
+    Y = np.concatenate([Hb.real, Hb.imag], axis=2).reshape(n_c * n_p, 2 * K)
+    Z = (Y @ Q).reshape(n_c, n_p, -1).transpose(1, 2, 0)  # (n_p, nb, n_c)
+    units = [(r, k) for r in range(M) for k, (n, _) in enumerate(names) if n in orders[r]]
+    nb, nu = R.shape[0], len(units)
+    G = np.zeros((n_p, nb, 2 * nu + 2 * n_p))
+    for u, (r, k) in enumerate(units):
+        G[:, :, u] = D[:, k, None] * R[None, :, r]
+        G[:, :, nu + u] = D[:, k, None] * R[None, :, M + r]
+    for p in range(n_p):
+        G[p, :, 2 * nu + 2 * p:2 * nu + 2 * p + 2] = R[:, 2 * M:2 * M + 2]
+    x = scipy.linalg.lstsq(G.reshape(n_p * nb, -1), Z.reshape(n_p * nb, n_c), lapack_driver="gelsy")[0]
+    X = np.zeros((M, len(names), n_c), dtype=complex)
+    for u, (r, k) in enumerate(units):
+        X[r, k] = x[u] / scale[r] + 1j * x[nu + u] / scale[M + r]
+    return X
+
+
+def cleaned_groups(freq_hz, Hb, angles_rad, poles, orders, form: str = "accelerance") -> dict:
+    """Order groups as :func:`~tiremodal_cli.modal.spatial.decompose` gives them, with the
+    modes found read out of the leaks.
+
+    Group n's rows are its own modes' coefficients (:func:`order_lsfd`) plus group n of
+    the minimum-norm decomposition of the FRFs less every mode found: rows_n = X_n +
+    [D⁺(H − Σ_m D_m X_m)]_n. The sum over the groups of ``back_n @ rows_n`` is still the
+    FRFs (D D⁺ = I on points of a grid). Arguments as :func:`order_lsfd`.
+
+    Returns
+    -------
+    {n: (rows, back)} as :func:`~tiremodal_cli.modal.spatial.decompose`
+    """
+    n_c, n_p, K = Hb.shape
+    D, names = grid_design(angles_rad)
+    X = order_lsfd(freq_hz, Hb, angles_rad, poles, orders, form)
+    # each grid column's modal coefficient of every channel: (n_cols · n_c, K)
+    own = synthesize(freq_hz, X.transpose(1, 2, 0).reshape(-1, X.shape[0]), poles, form=form)
+    own = own.reshape(len(names), n_c, K)
+    model = np.einsum("pk,kcf->cpf", D, own)
+    groups = decompose(Hb - model, angles_rad)
+    out = {}
+    for n, (rows, back) in groups.items():
+        ks = [k for k, (m, _) in enumerate(names) if m == n]
+        out[n] = (rows + own[ks].reshape(len(ks) * n_c, K), back)
+    return out
+
+
+def weak_in_frfs(modes, min_significance: float) -> tuple[list, list]:
+    """Drop the modes that explain under ``min_significance`` of the physical FRFs around
+    their frequency, whatever their share within their order group.
+
+    On a complete grid a group's rows are the data of one order, and a weak order beside a
+    strong one of another order is kept by its share within its group
+    (:func:`~tiremodal_cli.modal.groupfit.fit_group`). With points missing a group's rows
+    are a construction — the grid has more harmonics than there are points, and group n
+    holds the minimum-norm share of whatever the modal model leaves (the modes not found,
+    the found ones' misfit) — so a share within it is no evidence of a mode; the physical
+    FRFs are. ``modes`` : list of :class:`~tiremodal_cli.modal.merge.MergedMode`.
+
+    Returns
+    -------
+    kept : list ; dropped : list of dict (frequency, damping, group, reason)
+    """
+    kept, dropped = [], []
+    for m in modes:
+        if m.significance >= min_significance:
+            kept.append(m)
+            continue
+        f, z = poles_to_modal(m.pole)
+        dropped.append({"frequency_hz": float(f), "damping_ratio": float(z), "group": int(m.group),
+                        "reason": f"insignificant in the FRFs of a grid with missing points: explains "
+                                  f"{100 * m.significance:.1f} % of the response at its frequency (its share "
+                                  f"within its group, {100 * m.significance_in_group:.1f} %, is no evidence there)"})
+    return kept, dropped
