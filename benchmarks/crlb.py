@@ -396,7 +396,7 @@ def print_case(res) -> None:
     for g in res["groups"]:
         if g["status"] != "found":
             e = "–" if g["error"] is None else f"{100 * g['error']:+.3f} %"
-            print(f"  {g['frequency_hz']:8.2f} Hz n={g['n']:<2d} {g['branch']:8s} {g['status'][:22]:22s} "
+            print(f"  {g['frequency_hz']:8.2f} Hz n={g['n']:<2d} {g['branch']:8s} {g['status']:28s} "
                   f"snr {g['snr']:7.1f}  σ_f/f {100 * g['sigma_u']:.4f} % (u) {100 * g['sigma_s']:.4f} % (s)  "
                   f"purity {g['purity']:.3f}  nearest row {e} = {_sig(g['error'], g['sigma_u'])} σ_u, "
                   f"{_sig(g['error'], g['sigma_s'])} σ_s")
