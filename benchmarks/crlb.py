@@ -310,6 +310,10 @@ def group_bound(g, ctx, widen=1.0, background=True):
     f, z, orders, pm = poles_of(idx, truth)
     A = np.stack([ctx["A"][:, :, ks].sum(axis=-1) for ks in pm], axis=-1)  # (C, P, K)
     lines = (ctx["freq"] >= lo) & (ctx["freq"] <= hi) & (ctx["freq"] > 0)
+    df = ctx["freq"][1] - ctx["freq"][0]
+    while lines.sum() < 2 * (len(f) + 1):  # twice the complex unknowns of an FRF (K residues, a constant)
+        lo, hi = lo - df / 2, hi + df / 2
+        lines = (ctx["freq"] >= lo) & (ctx["freq"] <= hi) & (ctx["freq"] > 0)
     w, s = 2 * np.pi * ctx["freq"][lines], ctx["s"][:, :, lines]
     mean = float(np.mean(tf[mem]))
     grad = np.zeros(2 * len(f))
