@@ -20,7 +20,8 @@ from tiremodal_cli.errors import DataFormatError, ParameterError
 from tiremodal_cli.frf.windows import correct_poles
 from tiremodal_cli.modal.band import band_or_every_line, default_band, no_stable_mode, order_for_lines
 from tiremodal_cli.modal.classify import classify
-from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
+from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly, refit_group
+from tiremodal_cli.modal.refine import refine_poles
 from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
 from tiremodal_cli.modal.lsfd import mpc
@@ -254,6 +255,7 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
     b = principal_responses(data.freq, data.rows, None, rtol=data.opt.rtol_svd)
     d = stabilize(b, _group_poles(data, b, spatial, group_max), data.opt.stabilization)
     s = np.array([c.representative.s for c in d.selected()], dtype=complex)
+    s0 = s.copy()
     parts = [c.representative.participation for c in d.selected()]
     std = np.array([c.frequency_std_hz for c in d.selected()])
     if s.size and all(pt is not None for pt in parts):
@@ -263,12 +265,26 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
     if fit is None:
         return d, [], rej, None
     scatter = {c.representative.s: c.frequency_std_hz for c in d.selected()}
+    fit, s, scatter, refit = _refined(data, fit, s, s0, parts, scatter, refit)
     noise = float(np.sqrt(np.mean(np.sum(np.abs(data.rows - fit.synthesis) ** 2, axis=0))))
     modes = [GroupMode(s[k], data.group, data.back @ fit.residues[:, k], float(fit.significance[k]),
                        scatter[complex(s[k])], swap_cost(data.rows, fit.synthesis, s, k, refit),
                        float(fit.own[k]), noise, float(np.linalg.norm(fit.residues[:, k]) * abs(s[k]) ** 2 / abs(s[k].real)))
              for k in range(s.size)]
     return d, modes, rej, data.back @ fit.synthesis
+
+
+def _refined(data: GroupData, fit, s, s0, parts, scatter: dict, refit):
+    """The group's kept poles ``s`` refined against its rows (:func:`refine_poles`; the
+    poly-reference participation of each pole from ``parts``, in the order of ``s0``), and
+    the group's fit, scatter ({pole: Hz}) and refit with them; unchanged when no pole moved."""
+    L = np.array([parts[list(s0).index(p)] for p in s]) if all(pt is not None for pt in parts) else None
+    s_new = refine_poles(data.freq, data.rows, fit.synthesis, s, L, form=data.form)
+    if np.array_equal(s_new, s):
+        return fit, s, scatter, refit
+    scatter = {complex(a): scatter[complex(b)] for a, b in zip(s_new, s)}
+    fit, refit = refit_group(data, s_new, L)
+    return fit, s_new, scatter, refit
 
 
 def _result(band: _Band, shape, modes, synth, exp_tau_s, *, diagrams, rejected, meta) -> ModalResult:
