@@ -109,3 +109,4 @@ def test_no_jump_onto_another_mode():
     s0 = _biased(s, [-(MAX_SHIFT_HALF_WIDTHS + 0.6)])
     s1 = _refined(H, s0)
     assert s1[0] == s0[0]
+

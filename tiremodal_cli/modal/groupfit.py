@@ -23,7 +23,7 @@ from tiremodal_cli.modal.lsfd import lsfd, lsfd_participation, significance
 if TYPE_CHECKING:  # for the annotation only: modes imports this module
     from tiremodal_cli.modal.modes import ModalOptions
 
-__all__ = ["GroupData", "GroupFit", "NOISE_ALPHA", "PEAK_OVER_NOISE", "fit_group", "fit_group_poly", "own_peaks", "refit_group"]
+__all__ = ["GroupData", "GroupFit", "NOISE_ALPHA", "PEAK_OVER_NOISE", "fit_group", "fit_group_poly", "own_peaks"]
 
 
 @dataclass(frozen=True)
@@ -142,21 +142,6 @@ def fit_group_poly(data: GroupData, s, L, std_hz=None) -> tuple:
         rejected.append(_rejection(s[r], data.group, why))
         s, L, std_hz = np.delete(s, r), np.delete(L, r, axis=0), np.delete(std_hz, r)
     return GroupFit(residues, synthesis, sig, own), s, rejected, partial(_poly_synthesis, data, Y, L)
-
-
-def refit_group(data: GroupData, s, L=None) -> tuple:
-    """The group's fit with the poles ``s`` (participation ``L``, (m, n_h), or None: a free
-    residue per row), no pole dropped: (GroupFit, refit) as :func:`fit_group` returns them."""
-    if L is None:
-        fit = lsfd(data.freq, data.rows, s, form=data.form)
-        residues, synthesis, refit = fit.residues, fit.synthesis, partial(_lsfd_synthesis, data)
-    else:
-        Y = data.rows.reshape(data.n_h, data.n_c, -1).transpose(1, 0, 2)
-        res3, syn3 = lsfd_participation(data.freq, Y, s, L, form=data.form)
-        residues, synthesis = _harmonic_major(res3, data), _harmonic_major(syn3, data)
-        refit = partial(_poly_synthesis, data, Y, L)
-    sig, own = _significances(data, residues, s)
-    return GroupFit(residues, synthesis, sig, own), refit
 
 
 def _weakest(data: GroupData, synthesis, s, sig, refit, own_peak):

@@ -155,7 +155,7 @@ def _refine_set(freq, rows, weight, s, s_orig, L, idx, q):
     return out
 
 
-def refine_poles(freq, rows, synthesis, s, L=None, *, form="accelerance"):
+def refine_poles(freq, rows, synthesis, s, L=None, *, form="accelerance", free=None):
     """Refine a group's adopted poles by variable-projection least squares (module doc).
 
     Parameters
@@ -168,6 +168,8 @@ def refine_poles(freq, rows, synthesis, s, L=None, *, form="accelerance"):
     L : (m, n_ref) complex ndarray, optional   participation factors (poly-reference);
                                       None: one reference, a free residue per row
     form : str                        the FRFs' form
+    free : (m,) bool ndarray, optional    the poles to refine (default all); the others
+                                      are held, with residues
 
     Returns
     -------
@@ -185,7 +187,11 @@ def refine_poles(freq, rows, synthesis, s, L=None, *, form="accelerance"):
     df = freq[1] - freq[0]
     fn, zeta = poles_to_modal(s)
     out = s.copy()
-    for idx in [i for _ in range(PASSES) for i in overlapping_sets(fn, zeta * fn)]:
+    idx_free = np.arange(s.size) if free is None else np.flatnonzero(free)
+    if idx_free.size == 0:
+        return s
+    sets = [idx_free[i] for i in overlapping_sets(fn[idx_free], zeta[idx_free] * fn[idx_free])]
+    for idx in [i for _ in range(PASSES) for i in sets]:
         new = _refine_set(freq, rows, weight, out, s, L, idx, q)
         if new is None:
             continue
