@@ -22,6 +22,7 @@ from tiremodal_cli.modal.band import band_or_every_line, default_band, no_stable
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.gaps import cleaned_groups, weak_in_frfs
 from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
+from tiremodal_cli.modal.refine import refine_poles
 from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
 from tiremodal_cli.modal.lsfd import mpc
@@ -142,19 +143,21 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
                                       and is_circumferential(point_angle, channel_location))
     groups, group_max, opt = _order_groups(band, point_angle, spatial, opt)
     gaps = spatial and grid_points(point_angle) > len(point_angle)  # points missing: every order leaks
-    diagrams, modes, rejected, synth = _modes_of_groups(band, groups, point_angle, spatial, gaps, group_max, opt,
-                                                        progress)
+    diagrams, modes, rejected, synth, kept = _modes_of_groups(band, groups, point_angle, spatial, gaps, group_max,
+                                                              opt, progress)
     if gaps:  # once more, each group read with the found modes' leaks taken out (modal.gaps)
         groups = cleaned_groups(band.freq, band.Hb, point_angle, [m.pole for m in modes],
                                 [set(m.order_energy) for m in modes])
-        diagrams, modes, rejected, synth = _modes_of_groups(band, groups, point_angle, spatial, gaps, group_max,
-                                                            opt, progress)
+        diagrams, modes, rejected, synth, kept = _modes_of_groups(band, groups, point_angle, spatial, gaps,
+                                                                  group_max, opt, progress)
     if gaps:
         modes, weak = weak_in_frfs(modes, opt.min_significance)
         rejected += weak
     modes, edge = off_edges(modes, band.freq[0], band.freq[-1], exp_tau_s)
     if not modes:
         raise no_stable_mode(band.freq, group_max)
+    if opt.refine:  # (off by default: docs/lsce.md, "Pole refinement")
+        modes = _refine_adopted(modes, {g: k for g, k in kept.items() if k is not None})
     meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
             "max_order": int(group_max), "exp_tau_s": exp_tau_s}
     return _result(band, H.shape, modes, synth, exp_tau_s, diagrams=diagrams, rejected=rejected + edge, meta=meta)
@@ -164,13 +167,14 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
                      opt: ModalOptions, progress):
     """Every order group swept and fitted, and their modes merged into one per physical pole.
 
-    Returns (diagrams, modes (MergedMode), rejected, the physical synthesis (n_frf, K))."""
-    diagrams, found, rejected = [], [], []
+    Returns (diagrams, modes (MergedMode), rejected, the physical synthesis (n_frf, K), each
+    group's kept fit ({group: kept or None}, for the pole refinement))."""
+    diagrams, found, rejected, kept = [], [], [], {}
     synth = np.zeros(band.flat.shape, dtype=complex)
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
         data = GroupData(band.freq, rows, back, band.flat, "accelerance", opt, g, rows.shape[0] // band.Hb.shape[0],
                          band.Hb.shape[0])
-        d, modes, rej, group_synth = _group_modes(data, spatial, group_max)
+        d, modes, rej, group_synth, kept[g] = _group_modes(data, spatial, group_max)
         diagrams.append((g, d))
         found += modes
         rejected += rej
@@ -187,7 +191,7 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
     if not gaps:  # (with gaps: leak_copies only)
         modes, unseen = under_residual(modes, band.freq[1] - band.freq[0], band.Hb.shape[0], opt.min_significance)
         rejected += unseen
-    return diagrams, modes, rejected, synth
+    return diagrams, modes, rejected, synth, kept
 
 
 def _live_channels(freq_hz, H) -> np.ndarray:
@@ -270,10 +274,13 @@ def _group_poles(data: GroupData, b, spatial: bool, group_max: int) -> list:
 
 def _group_modes(data: GroupData, spatial: bool, group_max: int):
     """One order group: its stabilization diagram, its modes (GroupMode), the poles dropped
-    after LSFD, and its synthesis in the physical FRFs."""
+    after LSFD, its synthesis in the physical FRFs, and (with ``opt.refine``; else None)
+    what :func:`_refine_adopted` needs: (data, kept poles, their participation, the fit's
+    synthesis in the group's rows)."""
     b = principal_responses(data.freq, data.rows, None, rtol=data.opt.rtol_svd)
     d = stabilize(b, _group_poles(data, b, spatial, group_max), data.opt.stabilization)
     s = np.array([c.representative.s for c in d.selected()], dtype=complex)
+    s0 = s.copy()
     parts = [c.representative.participation for c in d.selected()]
     std = np.array([c.frequency_std_hz for c in d.selected()])
     if s.size and all(pt is not None for pt in parts):
@@ -281,14 +288,37 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
     else:
         fit, s, rej, refit = fit_group(data, s, std)
     if fit is None:
-        return d, [], rej, None
+        return d, [], rej, None, None
     scatter = {c.representative.s: c.frequency_std_hz for c in d.selected()}
     noise = float(np.sqrt(np.mean(np.sum(np.abs(data.rows - fit.synthesis) ** 2, axis=0))))
     modes = [GroupMode(s[k], data.group, data.back @ fit.residues[:, k], float(fit.significance[k]),
                        scatter[complex(s[k])], swap_cost(data.rows, fit.synthesis, s, k, refit),
                        float(fit.own[k]), noise, float(np.linalg.norm(fit.residues[:, k]) * abs(s[k]) ** 2 / abs(s[k].real)))
              for k in range(s.size)]
-    return d, modes, rej, data.back @ fit.synthesis
+    if not data.opt.refine:
+        return d, modes, rej, data.back @ fit.synthesis, None
+    L = np.array([parts[list(s0).index(p)] for p in s]) if all(pt is not None for pt in parts) else None
+    return d, modes, rej, data.back @ fit.synthesis, (data, s, L, fit.synthesis)
+
+
+def _refine_adopted(modes: list, kept: dict) -> list:
+    """The merged modes with each pole refined against its dominant group's rows
+    (:func:`refine_poles`; the group's other kept poles, the copies the merge dropped among
+    them, held fixed). The shapes stay the group fits' (a pole moves by a fraction of its
+    half-power half-width). ``kept`` : {group: (GroupData, poles (m,), participation (m,
+    n_h) or None, the group fit's synthesis)}."""
+    out = list(modes)
+    for g, (data, s, L, synthesis) in kept.items():
+        mine = {i: int(np.flatnonzero(s == m.pole)[0]) for i, m in enumerate(modes)
+                if m.group == g and np.any(s == m.pole)}
+        if not mine:
+            continue
+        free = np.zeros(s.size, dtype=bool)
+        free[list(mine.values())] = True
+        s_new = refine_poles(data.freq, data.rows, synthesis, s, L, form=data.form, free=free)
+        for i, k in mine.items():
+            out[i] = replace(out[i], pole=complex(s_new[k]))
+    return out
 
 
 def _result(band: _Band, shape, modes, synth, exp_tau_s, *, diagrams, rejected, meta) -> ModalResult:

@@ -31,6 +31,10 @@ class ModalOptions:
     workers : threads that solve a poly-reference sweep's model orders (LAPACK releases the
               GIL; the poles are the same to the bit whatever the number)
     order_within_band : lower the highest order to what the band's lines allow (``run``)
+    refine : refine each adopted pole by variable-projection least squares in its order
+              group's FRFs (:mod:`.refine`). Off: measured on the validation matrix it mends
+              biased modes of the symmetric tyres but moves right ones where an added mass
+              mixes the orders (docs/lsce.md, "Pole refinement")
     """
 
     band_hz: tuple[float, float] | None = None
@@ -45,6 +49,7 @@ class ModalOptions:
     skip: int = 0
     workers: int = 1
     order_within_band: bool = False
+    refine: bool = False
 
     def check(self):
         if self.spatial not in ("auto", "on", "off"):
