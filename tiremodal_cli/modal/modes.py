@@ -22,7 +22,7 @@ from tiremodal_cli.modal.band import band_or_every_line, default_band, no_stable
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.gaps import cleaned_groups, weak_in_frfs
 from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
-from tiremodal_cli.modal.refine import refine_poles
+from tiremodal_cli.modal.refine import refine_adopted
 from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
 from tiremodal_cli.modal.lsfd import mpc
@@ -157,7 +157,7 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     if not modes:
         raise no_stable_mode(band.freq, group_max)
     if opt.refine:  # (off by default: docs/lsce.md, "Pole refinement")
-        modes = _refine_adopted(modes, {g: k for g, k in kept.items() if k is not None})
+        modes = refine_adopted(modes, {g: k for g, k in kept.items() if k is not None})
     meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
             "max_order": int(group_max), "exp_tau_s": exp_tau_s}
     return _result(band, H.shape, modes, synth, exp_tau_s, diagrams=diagrams, rejected=rejected + edge, meta=meta)
@@ -299,26 +299,6 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
         return d, modes, rej, data.back @ fit.synthesis, None
     L = np.array([parts[list(s0).index(p)] for p in s]) if all(pt is not None for pt in parts) else None
     return d, modes, rej, data.back @ fit.synthesis, (data, s, L, fit.synthesis)
-
-
-def _refine_adopted(modes: list, kept: dict) -> list:
-    """The merged modes with each pole refined against its dominant group's rows
-    (:func:`refine_poles`; the group's other kept poles, the copies the merge dropped among
-    them, held fixed). The shapes stay the group fits' (a pole moves by a fraction of its
-    half-power half-width). ``kept`` : {group: (GroupData, poles (m,), participation (m,
-    n_h) or None, the group fit's synthesis)}."""
-    out = list(modes)
-    for g, (data, s, L, synthesis) in kept.items():
-        mine = {i: int(np.flatnonzero(s == m.pole)[0]) for i, m in enumerate(modes)
-                if m.group == g and np.any(s == m.pole)}
-        if not mine:
-            continue
-        free = np.zeros(s.size, dtype=bool)
-        free[list(mine.values())] = True
-        s_new = refine_poles(data.freq, data.rows, synthesis, s, L, form=data.form, free=free)
-        for i, k in mine.items():
-            out[i] = replace(out[i], pole=complex(s_new[k]))
-    return out
 
 
 def _result(band: _Band, shape, modes, synth, exp_tau_s, *, diagrams, rejected, meta) -> ModalResult:

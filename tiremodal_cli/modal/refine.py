@@ -37,6 +37,8 @@ squares problems whose variables separate, SIAM J. Numer. Anal. 10(2).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import scipy.linalg
 import scipy.optimize
@@ -44,7 +46,7 @@ import scipy.optimize
 from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.modal.lsce import poles_to_modal
 
-__all__ = ["MAX_DAMPING_FACTOR", "MAX_SHIFT_HALF_WIDTHS", "WINDOW_HALF_WIDTHS", "refine_poles"]
+__all__ = ["MAX_DAMPING_FACTOR", "MAX_SHIFT_HALF_WIDTHS", "WINDOW_HALF_WIDTHS", "refine_poles", "refine_adopted"]
 
 #: the window: lines within this many half-power half-widths of a refined pole (its
 #: half-power band and as much again on each flank, where the phase still turns)
@@ -199,4 +201,24 @@ def refine_poles(freq, rows, synthesis, s, L=None, *, form="accelerance", free=N
         order_kept = np.array_equal(np.argsort(f_new, kind="stable"), np.argsort(fn, kind="stable"))
         if order_kept and (f_new.size < 2 or np.min(np.diff(np.sort(f_new))) > df):
             out = new
+    return out
+
+
+def refine_adopted(modes: list, kept: dict) -> list:
+    """The merged modes with each pole refined against its dominant group's rows
+    (:func:`refine_poles`; the group's other kept poles, the copies the merge dropped among
+    them, held fixed). The shapes stay the group fits' (a pole moves by a fraction of its
+    half-power half-width). ``kept`` : {group: (GroupData, poles (m,), participation (m,
+    n_h) or None, the group fit's synthesis)}."""
+    out = list(modes)
+    for g, (data, s, L, synthesis) in kept.items():
+        mine = {i: int(np.flatnonzero(s == m.pole)[0]) for i, m in enumerate(modes)
+                if m.group == g and np.any(s == m.pole)}
+        if not mine:
+            continue
+        free = np.zeros(s.size, dtype=bool)
+        free[list(mine.values())] = True
+        s_new = refine_poles(data.freq, data.rows, synthesis, s, L, form=data.form, free=free)
+        for i, k in mine.items():
+            out[i] = replace(out[i], pole=complex(s_new[k]))
     return out
