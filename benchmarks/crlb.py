@@ -52,7 +52,6 @@ has median 0.67), and every missed or mislabelled mode and every ``biased`` spur
 
 from __future__ import annotations
 
-import argparse
 import importlib.util
 import json
 from pathlib import Path
@@ -414,10 +413,7 @@ def print_case(res) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("records", help="the JSON lines of benchmarks/validation.py --out")
-    ap.add_argument("keep", help="the folder of benchmarks/validation.py --keep")
-    ap.add_argument("--only", action="append", default=[], help="only the cases of this name (repeatable)")
+    ap = spurious.matrix_parser(__doc__)
     ap.add_argument("--widen", type=float, default=1.0, help="window: this many half-power half-widths")
     ap.add_argument("--no-background", action="store_true", help="no free constant per FRF")
     ap.add_argument("--out", help="write each case's bounds here (JSON lines)")

@@ -77,22 +77,34 @@ def classify_spurious(rows: list[dict], truth: list[dict]) -> list[dict]:
     return out
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def matrix_parser(doc: str) -> argparse.ArgumentParser:
+    """The arguments of a script over a kept validation run: its records, its folder, --only."""
+    ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     ap.add_argument("records", help="the JSON lines of benchmarks/validation.py --out")
     ap.add_argument("keep", help="the folder of benchmarks/validation.py --keep")
     ap.add_argument("--only", action="append", default=[], help="only the cases of this name (repeatable)")
-    a = ap.parse_args(argv)
-    counts: dict[str, int] = {}
-    for line in Path(a.records).read_text(encoding="utf-8").splitlines():
+    return ap
+
+
+def spurious_cases(records, keep, only=()):
+    """Each kept case with spurious modes: (record, its run folder, the generator's truth
+    modes, the modal table's rows)."""
+    for line in Path(records).read_text(encoding="utf-8").splitlines():
         rec = json.loads(line)
-        if (a.only and rec["name"] not in a.only) or not rec.get("spurious"):
+        if (only and rec["name"] not in only) or not rec.get("spurious"):
             continue
-        run = Path(a.keep) / folder_of(rec["name"]) / "run"
+        run = Path(keep) / folder_of(rec["name"]) / "run"
         case = Case(**{k: v for k, v in rec["case"].items() if k in Case.__dataclass_fields__})
         truth = simulate(config_for(case)).truth["modes"]
         with open(run / "modes.csv", newline="", encoding="utf-8") as fh:
             rows = [dict(r, frequency_hz=float(r["frequency_hz"])) for r in csv.DictReader(fh)]
+        yield rec, run, truth, rows
+
+
+def main(argv=None) -> int:
+    a = matrix_parser(__doc__).parse_args(argv)
+    counts: dict[str, int] = {}
+    for rec, run, truth, rows in spurious_cases(a.records, a.keep, a.only):
         with h5py.File(run / "modal.h5") as f:
             sig_group = json.loads(f.attrs["meta"]).get("significance_in_group", [None] * len(rows))
         print(f"{rec['name']}: {rec['spurious']} spurious of {rec['adopted']}")

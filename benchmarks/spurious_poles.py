@@ -19,23 +19,19 @@ group (what keeps it apart in the merge: above the χ²(2)/2 quantile 6.9).
 
 from __future__ import annotations
 
-import argparse
-import csv
 import json
 from pathlib import Path
 
 import h5py
 import numpy as np
 
-from spurious import classify_spurious, folder_of
+from spurious import classify_spurious, matrix_parser, spurious_cases
 from tiremodal_cli.io.frffile import read_frf
 from tiremodal_cli.modal import modes as stage
 from tiremodal_cli.modal.groupfit import PEAK_OVER_NOISE
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.merge import channel_mac
 from tiremodal_cli.modal.options import ModalOptions
-from tiremodal_cli.tyre.simulate import simulate
-from tiremodal_cli.workflow.validation import Case, config_for
 
 
 def rerun(run: Path):
@@ -86,20 +82,8 @@ def conditions(m, modes, found, line_hz: float, n_ch: int, min_significance: flo
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("records", help="the JSON lines of benchmarks/validation.py --out")
-    ap.add_argument("keep", help="the folder of benchmarks/validation.py --keep")
-    ap.add_argument("--only", action="append", default=[], help="only the cases of this name (repeatable)")
-    a = ap.parse_args(argv)
-    for line in Path(a.records).read_text(encoding="utf-8").splitlines():
-        rec = json.loads(line)
-        if (a.only and rec["name"] not in a.only) or not rec.get("spurious"):
-            continue
-        run = Path(a.keep) / folder_of(rec["name"]) / "run"
-        case = Case(**{k: v for k, v in rec["case"].items() if k in Case.__dataclass_fields__})
-        truth = simulate(config_for(case)).truth["modes"]
-        with open(run / "modes.csv", newline="", encoding="utf-8") as fh:
-            rows = [dict(r, frequency_hz=float(r["frequency_hz"])) for r in csv.DictReader(fh)]
+    a = matrix_parser(__doc__).parse_args(argv)
+    for rec, run, truth, rows in spurious_cases(a.records, a.keep, a.only):
         table, found, modes, line_hz, n_ch = rerun(run)
         print(f"{rec['name']}: {rec['spurious']} spurious of {rec['adopted']}")
         for s in classify_spurious(rows, truth):
