@@ -156,8 +156,8 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     modes, edge = off_edges(modes, band.freq[0], band.freq[-1], exp_tau_s)
     if not modes:
         raise no_stable_mode(band.freq, group_max)
-    if opt.refine:  # (off by default: docs/lsce.md, "Pole refinement")
-        modes = refine_adopted(modes, {g: k for g, k in kept.items() if k is not None})
+    if opt.refine:  # the poles near the band's edges (docs/lsce.md, "Pole refinement")
+        modes = refine_adopted(modes, {g: k for g, k in kept.items() if k is not None}, synth)
     meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
             "max_order": int(group_max), "exp_tau_s": exp_tau_s}
     return _result(band, H.shape, modes, synth, exp_tau_s, diagrams=diagrams, rejected=rejected + edge, meta=meta)

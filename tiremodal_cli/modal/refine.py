@@ -27,7 +27,16 @@ inside the box it may move in — its frequency within its half-power half-width
 original (:data:`MAX_SHIFT_HALF_WIDTHS`; ends on the box's edge: the minimum lies
 elsewhere, on another mode), its damping within a factor :data:`MAX_DAMPING_FACTOR` — and
 when the group's poles keep their order and stay more than one line apart (no swap, no
-merge). Otherwise the set keeps its original poles.
+merge). Otherwise the set keeps its original poles. The solver's Jacobian is taken by
+forward differences with an absolute step (:func:`_jacobian`; scipy's relative step is
+√ε at θ = 0, below the projection's rounding noise, and the solver stopped where it
+started: the refinement measured in session 10 had moved almost nothing).
+
+Which poles (:func:`refine_adopted`): only those within :data:`EDGE_HALF_WIDTHS` half-power
+half-widths of a band edge, where LSCE's band-limited model errs; and a moved pole is kept
+only where it also fits the physical FRFs better (every adopted pole near it in the basis,
+a free residue per FRF: the model the group's rows lack where an added mass mixes the
+orders).
 
 References
 ----------
@@ -58,6 +67,20 @@ MAX_SHIFT_HALF_WIDTHS = 1.0
 PASSES = 2
 #: a refined damping ratio stays within this factor of the original either way
 MAX_DAMPING_FACTOR = 2.0
+#: the Jacobian's absolute finite-difference step, in half-power half-widths (frequency)
+#: and in ln σ (damping): above the projection's rounding noise (measured on the ring's
+#: rim case: the derivative is steady to 4 % from 1e-5 on, noise below), far below any
+#: shift that matters (0.3 % of a frequency is ≥ 0.1 half-width for ζ ≤ 3 %)
+JACOBIAN_STEP = 1e-4
+#: only the poles within this many half-power half-widths of a band edge are refined:
+#: there LSCE's band-limited model (a finite sum of exponentials in the zoom band's impulse
+#: responses; a mode's flank cut at the band edge is not one) errs. Measured on the
+#: validation matrix (main at c803a2c, 3,063 modes adopted): the median |f̂ − f| / ζf is
+#: 0.017 at 1–2 half-widths from an edge, 0.0039 at 2–3, 0.0015 at 3–4, 0.0013 at 4–6 and
+#: 0.0005–0.0010 beyond 6 (twice the interior's median up to 6). Elsewhere a group's rows
+#: are not always a complete modal model (an added mass's split pairs and leaked orders),
+#: and the refinement moved right modes off (docs/lsce.md, "Pole refinement")
+EDGE_HALF_WIDTHS = 6.0
 
 
 def overlapping_sets(fn, hw) -> list:
@@ -119,6 +142,25 @@ def _poles(theta, s0, idx):
     return s
 
 
+def _jacobian(fun, theta, step=JACOBIAN_STEP):
+    """(n_res, n_θ) forward differences of ``fun`` at ``theta`` with an absolute step (in
+    the box).
+
+    scipy's ``diff_step`` is relative to |θ| (and falls back to √ε at θ = 0, where every
+    refinement starts): steps of 1e-8 … 1e-9 half-widths, below the rounding noise of the
+    projection (the basis is near-singular: a far pole's and the residual terms' columns
+    are collinear over a few lines), gave a Jacobian of noise, and the solver stopped at
+    once on its step tolerance (measured: the ring's 24.45 Hz rim mode stayed at 24.31 Hz
+    where the weighted residual's minimum is at 24.456 Hz, 3.6e4 times lower)."""
+    r0 = fun(theta)
+    J = np.empty((r0.size, theta.size))
+    for k in range(theta.size):
+        t = theta.copy()
+        t[k] += step if t[k] <= 0 else -step
+        J[:, k] = (fun(t) - r0) / (t[k] - theta[k])
+    return J
+
+
 def _refine_set(freq, rows, weight, s, s_orig, L, idx, q):
     """Refine the poles ``idx`` of ``s`` (in their box about ``s_orig``); returns the new
     poles (all) or None."""
@@ -148,8 +190,8 @@ def _refine_set(freq, rows, weight, s, s_orig, L, idx, q):
     x0 = np.concatenate([(s[idx].imag - s_orig[idx].imag) / hw0, np.log(s[idx].real / s_orig[idx].real)])
     bound = np.concatenate([np.full(m, MAX_SHIFT_HALF_WIDTHS), np.full(m, np.log(MAX_DAMPING_FACTOR))])
     r0 = fun(x0)
-    sol = scipy.optimize.least_squares(fun, x0, bounds=(-bound, bound), x_scale=0.1,
-                                       diff_step=1e-4, max_nfev=40 * m)
+    sol = scipy.optimize.least_squares(fun, x0, jac=lambda th: _jacobian(fun, th), bounds=(-bound, bound),
+                                       x_scale=0.1, max_nfev=40 * m)
     if not sol.x.size or np.any(np.abs(sol.x) >= 0.98 * bound) or 2 * sol.cost >= float(r0 @ r0):
         return None
     out = s.copy()
@@ -204,21 +246,57 @@ def refine_poles(freq, rows, synthesis, s, L=None, *, form="accelerance", free=N
     return out
 
 
-def refine_adopted(modes: list, kept: dict) -> list:
+def refine_adopted(modes: list, kept: dict, synthesis=None) -> list:
     """The merged modes with each pole refined against its dominant group's rows
     (:func:`refine_poles`; the group's other kept poles, the copies the merge dropped among
     them, held fixed). The shapes stay the group fits' (a pole moves by a fraction of its
     half-power half-width). ``kept`` : {group: (GroupData, poles (m,), participation (m,
-    n_h) or None, the group fit's synthesis)}."""
+    n_h) or None, the group fit's synthesis)}. With ``synthesis`` ((n_frf, K) complex, the
+    physical FRFs' fit) a moved pole is kept only where it also fits the physical FRFs
+    better (:func:`_physical_residual`)."""
     out = list(modes)
-    for g, (data, s, L, synthesis) in kept.items():
+    for g, (data, s, L, synth_g) in kept.items():
         mine = {i: int(np.flatnonzero(s == m.pole)[0]) for i, m in enumerate(modes)
                 if m.group == g and np.any(s == m.pole)}
         if not mine:
             continue
         free = np.zeros(s.size, dtype=bool)
         free[list(mine.values())] = True
-        s_new = refine_poles(data.freq, data.rows, synthesis, s, L, form=data.form, free=free)
+        fn, zeta = poles_to_modal(s)
+        edge = np.minimum(fn - data.freq[0], data.freq[-1] - fn) / (zeta * fn)
+        free &= edge <= EDGE_HALF_WIDTHS
+        if not free.any():
+            continue
+        s_new = refine_poles(data.freq, data.rows, synth_g, s, L, form=data.form, free=free)
         for i, k in mine.items():
+            if s_new[k] == s[k]:
+                continue
+            if synthesis is not None:
+                poles = np.array([m.pole for m in out])
+                moved = poles.copy()
+                moved[i] = s_new[k]
+                if _physical_residual(data, synthesis, moved, i) >= _physical_residual(data, synthesis, poles, i):
+                    continue
             out[i] = replace(out[i], pole=complex(s_new[k]))
     return out
+
+
+def _physical_residual(data, synthesis, poles, i) -> float:
+    """The weighted residual of the physical FRFs over pole ``i``'s window (its half-power
+    band and :data:`WINDOW_HALF_WIDTHS` half-widths about it) fitted with every adopted pole
+    whose band reaches the window (a free residue per FRF) and the lower and upper residual
+    terms; each FRF weighted by its noise (the median residual power of the stage's fit /
+    ln 2)."""
+    fn, zeta = poles_to_modal(poles)
+    hw = zeta * fn
+    lo, hi = fn[i] - WINDOW_HALF_WIDTHS * hw[i], fn[i] + WINDOW_HALF_WIDTHS * hw[i]
+    w = (data.freq >= lo) & (data.freq <= hi)
+    near = (fn + WINDOW_HALF_WIDTHS * hw >= lo) & (fn - WINDOW_HALF_WIDTHS * hw <= hi)
+    res = data.H_phys - synthesis
+    var = np.maximum(np.median(res.real**2 + res.imag**2, axis=1) / np.log(2), np.finfo(float).tiny)
+    Yc = data.H_phys[:, w].T / np.sqrt(var)[None, :]
+    Y = np.concatenate([Yc.real, Yc.imag], axis=0)
+    jw = 2j * np.pi * data.freq[w]
+    r = _projection_residual(_basis(jw, poles[near], np.ones((int(near.sum()), 1), dtype=complex),
+                                    FORM_POWER[data.form]), Y)
+    return float(r @ r)
