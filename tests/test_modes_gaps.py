@@ -167,8 +167,9 @@ def test_poles_fitted_to_noise_are_dropped_by_the_noise_floor():
     at 120 Hz. A pole fitted to the noise of an order group's rows (fixed, not searched)
     explains about √(p / N) of the physical response in its window — p residues of its
     group's rows against N values there (least squares on noise is a projection) — often
-    more than the 5 % share rule asks, never more than the 1 − 10⁻³/K quantile of that
-    share: the noise floor drops every one; the mode, 10 × the noise, is kept."""
+    more than the 5 % share rule asks; its energy there against the noise (the generator's)
+    is χ²(2p)/2, under the 1 − 10⁻³/K quantile: every one is dropped; the mode, 10 × the
+    noise, is kept."""
     from tiremodal_cli.modal.gaps import weak_in_frfs
     from tiremodal_cli.modal.lsfd import lsfd, significance, synthesize
     from tiremodal_cli.modal.merge import MergedMode
@@ -181,7 +182,8 @@ def test_poles_fitted_to_noise_are_dropped_by_the_noise_floor():
     zeta = 0.01
     s_mode = -zeta * 2 * np.pi * 120.0 + 2j * np.pi * 120.0 * np.sqrt(1 - zeta**2)
     unit = synthesize(freq, np.ones((1, 1)), [s_mode])[0]
-    H += 10 * np.cos(3 * th + 0.4)[None, :, None] * rng.normal(size=n_c)[:, None, None] * (unit / np.abs(unit).max())
+    H_mode = 10 * np.cos(3 * th + 0.4)[None, :, None] * rng.normal(size=n_c)[:, None, None] * (unit / np.abs(unit).max())
+    H = H + H_mode
     groups = decompose(H, th)
     flat = H.reshape(-1, freq.size)
     poles = [(3, s_mode)] + [(g, -0.01 * 2 * np.pi * f + 2j * np.pi * f) for g in (0, 1, 7) for f in (15, 40, 65, 90, 170)]
@@ -191,7 +193,7 @@ def test_poles_fitted_to_noise_are_dropped_by_the_noise_floor():
         phys = back @ lsfd(freq, rows, np.array([s])).residues[:, 0]
         sig = float(significance(freq, flat, phys[:, None], np.array([s]))[0])
         modes.append(MergedMode(s, g, phys, sig, {g: 1.0}, sig, 0.0))
-    kept, dropped = weak_in_frfs(modes, 0.05, freq, th, n_c)
+    kept, dropped = weak_in_frfs(modes, 0.05, freq, th, (H - H_mode).reshape(-1, freq.size))
     assert [m.pole for m in kept] == [s_mode]
     assert len(dropped) == len(poles) - 1
     assert sum(m.significance >= 0.05 for m in modes[1:]) >= 3  # the share rule alone keeps noise poles
