@@ -150,6 +150,27 @@ def test_crowd_when_an_alias_order_falls_in_the_half_power_band():
     assert narrow[2].n_confidence == pytest.approx(1.0, abs=1e-9)
 
 
+def test_an_alias_out_of_order_does_not_flatten_the_dispersion():
+    """12 points; the anti-phase branch n = 0 … 6 at 100 … 235 Hz (ζ = 0.02), and one more
+    order-1 pattern at 130 Hz (an air-cavity mode: n = 1 is held at 110 Hz, so it is given
+    the alias 11, out of the branch's order). The branch's dispersion is the measured
+    orders': continued from n = 5 → 6 (35 Hz per order), the top mode's alias 12 + 6 = 18
+    lies ~420 Hz above it, far outside 2ζf = 9.4 Hz — no crowd. Taking the 130 Hz mode's
+    inferred order 11 as a point of the curve flattened it at 235 Hz from n = 6 to 11 (a
+    branch's f(n) is made to rise) and put n = 18 inside the band (a false crowd: the
+    ring's 1,024 Hz combination with failed points read its opposite n = 15 so, behind
+    the cavity's n = 2 given the alias 38)."""
+    th = _grid(12)
+    modes = [(n, -0.5) for n in range(7)] + [(1, -0.5)]
+    f = [100.0, 110.0, 125.0, 145.0, 170.0, 200.0, 235.0, 130.0]
+    res = classify(f, _shapes(th, modes), th, LOCS, damping_ratio=[0.02] * 8)
+    assert [c.n for c in res] == [0, 1, 2, 3, 4, 5, 6, 11]
+    assert res[7].aliased and not res[7].in_order
+    assert not any(c.crowd for c in res)
+    alone = classify(f[:7], _shapes(th, modes[:7]), th, LOCS, damping_ratio=[0.02] * 7)
+    assert not res[6].aliased and res[6].n_confidence == pytest.approx(alone[6].n_confidence, abs=1e-12)
+
+
 def test_grid_top_order_is_read_on_a_uniform_grid_from_any_start():
     th = _grid(12, offset=0.2)
     S = _shapes(th, [(6, 0.5)])

@@ -147,8 +147,11 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
     reads = _partners_branches(freq_hz, reads, ns)
     reads = _other_branch(freq_hz, reads, ns, in_order, n_p)
-    crowd = _crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads],
-                    [o.sure for o in reads], n_p)
+    # the dispersion is measured by the clear modes, less those whose order is an alias that
+    # breaks the branch's rise (an order inferred, not measured: an air-cavity mode given an
+    # alias flattens the branch's f(n) up to it and makes every mode below it a crowd)
+    clear = [o.sure and (bool(in_order[r]) or int(ns[r]) == o.n_spatial) for r, o in enumerate(reads)]
+    crowd = _crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads], clear, n_p)
     pairs = _split_pairs(freq_hz, reads, ns, in_order)
     n_top = max_order(n_p)
     res = []

@@ -313,8 +313,11 @@ def leak_copies(found: list[GroupMode], leak: dict) -> tuple[list, list]:
     order-m pattern's coefficients into group n, and group n's sweep finds the pole there
     as well — a weak copy, biased by the other orders' leaks by more than its noise (seen:
     0.1–0.8 % on a 40-point ring test with 9 points failed), so the swap test does not
-    merge it. Its size tells it: a mode j of group n within the half-power half-width
-    (|Δf| ≤ ζ f) of a mode i of group m is i's copy when its response in group n at
+    merge it. Its size tells it: a mode j of group n within the half-power half-widths of
+    a mode i of group m and of its own (|Δf| ≤ min(ζ_i f_i, ζ_j f_j): a copy is i's pole
+    estimated again, fitted to i's resonance, so its band holds f_i — since session 11;
+    the ring's air-cavity n = 3 at 375.8 Hz, ζ = 0.5 %, 3.8 Hz below the opposite n = 15
+    with ζ f = 7.6 Hz, was dropped as its copy) is i's copy when its response in group n at
     resonance (:attr:`GroupMode.peak`) is no larger than i's leakage into group n plus
     group n's fit residual: p_j ≤ leak[(n, m)] p_i + σ_n. A mode of order n at that
     frequency (the ring's opposite n = 1 and n = 4 lie 0.02 bandwidths apart) fills group
@@ -335,7 +338,8 @@ def leak_copies(found: list[GroupMode], leak: dict) -> tuple[list, list]:
             continue
         for j in range(len(found)):
             gi, gj = found[i].group, found[j].group
-            if (j != i and j not in dropped_by and gj != gi and abs(fn[j] - fn[i]) <= zeta[i] * fn[i]
+            near = abs(fn[j] - fn[i]) <= min(zeta[i] * fn[i], zeta[j] * fn[j])
+            if (j != i and j not in dropped_by and gj != gi and near
                     and own[j] <= leak.get((gj, gi), 0.0) * own[i] + found[j].group_noise):
                 dropped_by[j] = i
     kept = [f for j, f in enumerate(found) if j not in dropped_by]

@@ -151,7 +151,7 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
         diagrams, modes, rejected, synth, kept = _modes_of_groups(band, groups, point_angle, spatial, gaps,
                                                                   group_max, opt, progress)
     if gaps:
-        modes, weak = weak_in_frfs(modes, opt.min_significance)
+        modes, weak = weak_in_frfs(modes, opt.min_significance, band.freq, point_angle, band.flat - synth)
         rejected += weak
     modes, edge = off_edges(modes, band.freq[0], band.freq[-1], exp_tau_s)
     if not modes:
