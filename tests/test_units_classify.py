@@ -150,6 +150,24 @@ def test_crowd_when_an_alias_order_falls_in_the_half_power_band():
     assert narrow[2].n_confidence == pytest.approx(1.0, abs=1e-9)
 
 
+def test_an_alias_order_seen_as_its_own_pole_a_bandwidth_away_is_no_crowd():
+    """12 points, ζ = 0.02; the in-phase branch f(1…6) = 100, 140, 160, 170, 171.5, 173 Hz
+    (n = 5, 6 weak, as in a crowd) continued with 1.5 Hz per order puts n = 8, the alias
+    12 − 4 of n = 4, at 176 Hz: 6 Hz from the n = 4 mode at 170 Hz, inside its 2ζf = 6.8 Hz.
+    But the estimator found n = 8's mode itself, a pole reading spatial order 4 (its branch
+    barely readable) at 177.5 Hz, 7.5 Hz from n = 4: the two were resolved and n = 4 is no
+    crowd. With that pole at 175 Hz (5 Hz away, inside the band) n = 4 is (4, 8)."""
+    th = _grid(12)
+    modes = [(1, 0.5), (2, 0.5), (3, 0.5), (4, 0.5), (5, 0.5), (6, 0.5), (8, 0.5 * np.exp(1.3j))]
+    S = _shapes(th, modes)
+    sig = [0.9, 0.9, 0.9, 0.9, 0.2, 0.2, 0.1]
+    for f_q, crowd in ((177.5, ()), (175.0, (4, 8))):
+        res = classify([100.0, 140.0, 160.0, 170.0, 171.5, 173.0, f_q], S, th, LOCS, significance=sig,
+                       damping_ratio=[0.02] * 7)
+        assert res[6].n_spatial == 4 and res[6].branch_confidence < 0.5
+        assert res[3].n == 4 and res[3].n_candidates == crowd
+
+
 def test_grid_top_order_is_read_on_a_uniform_grid_from_any_start():
     th = _grid(12, offset=0.2)
     S = _shapes(th, [(6, 0.5)])

@@ -147,9 +147,9 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
     reads = _partners_branches(freq_hz, reads, ns)
     reads = _other_branch(freq_hz, reads, ns, in_order, n_p)
-    crowd = _crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads],
-                    [o.sure for o in reads], n_p)
     pairs = _split_pairs(freq_hz, reads, ns, in_order)
+    crowd = _crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads],
+                    [o.sure for o in reads], n_p, [p[0] for p in pairs])
     n_top = max_order(n_p)
     res = []
     for r, o in enumerate(reads):
@@ -322,7 +322,13 @@ def _split_pairs(freq_hz, reads: list[_Reading], ns: list[int], in_order) -> lis
     return out
 
 
-def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points):
+def _alias_class(m: int, n_points: int, n_hi: int) -> set:
+    """The orders 0 … n_hi that alias onto spatial order m on a grid of N points (j N ± m)."""
+    return {c for j in range(0, n_hi // max(n_points, 1) + 2) for c in (j * n_points - m, j * n_points + m)
+            if 0 <= c <= n_hi}
+
+
+def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=None):
     """Modes whose order cannot be told: other orders that alias onto the same spatial
     order (n' ≡ ±n_s mod N) lie, by their branch's dispersion, within one half-power
     bandwidth 2ζf of the mode.
@@ -330,10 +336,15 @@ def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points):
     The branch's dispersion f(n) is the clear modes' (both confidences ≥ 0.5) frequencies
     against their orders, interpolated, and beyond the highest measured order continued
     with the last step's slope (the same-direction branch flattens under the sidewall
-    resonance, where many orders pile up). Candidates run up to 1.5 N; an alias order
-    that another mode of the branch holds is no candidate (its pole was found apart from
-    this one, so the two were resolved). Returns, per mode,
-    the sorted candidate orders (the mode's own included) when it is in a crowd, else ().
+    resonance, where many orders pile up). Candidates run up to 1.5 N. Where another order
+    c's mode lies is read from the dispersion, f(c), unless the estimator found a pole for
+    it apart from this one: a mode of the branch that holds c, or one that reads the same
+    spatial order (so may be any of its aliases) with f(c) inside its own half-power band
+    and nearer to f(c) than this mode (not the other member of this mode's split pair,
+    ``pair``: that is one order twice) — then c's mode is that pole, and c is a candidate
+    only when that pole lies within this mode's bandwidth (two poles of one spatial order
+    a bandwidth apart were resolved; their orders follow the branch's rise). Returns, per
+    mode, the sorted candidate orders (the mode's own included) when it is in a crowd, else ().
     """
     k = len(freq_hz)
     out = [()] * k
@@ -356,14 +367,21 @@ def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points):
         for r in range(k):
             if branch[r] != br:
                 continue
-            m = n_spatial[r]
-            alias = {c for j in range(0, n_hi // max(n_points, 1) + 2)
-                     for c in (j * n_points - m, j * n_points + m) if 0 <= c <= n_hi}
+            alias = _alias_class(n_spatial[r], n_points, n_hi)
             bw = 2 * z[r] * f[r]
-            # an alias order that another mode of the branch already holds was resolved:
-            # the estimator found its pole apart from this one
-            held = {ns[q] for q in range(k) if q != r and branch[q] == br and ns[q] != ns[r]}
-            near = sorted(c for c in alias if abs(f_of(c) - f[r]) <= bw and (c == ns[r] or c not in held))
+            others = [q for q in range(k) if q != r and branch[q] == br]
+            same = [q for q in others if n_spatial[q] in alias
+                    and (pair is None or pair[q] is None or pair[q] != pair[r])]
+
+            def f_seen(c):
+                # where order c's mode lies: at a pole the estimator found apart from this one
+                # when one holds c, or reads this spatial order with c's dispersion frequency
+                # in its half-power band, nearer to it than this mode
+                at = [q for q in others if ns[q] == c]
+                at += [q for q in same if abs(f[q] - f_of(c)) < min(abs(f[r] - f_of(c)), 2 * z[q] * f[q])]
+                return min((f[q] for q in at), key=lambda x: abs(x - f_of(c))) if at else f_of(c)
+
+            near = sorted(c for c in alias if c == ns[r] or abs(f_seen(c) - f[r]) <= bw)
             if len(near) > 1:
                 out[r] = tuple(int(c) for c in near)
     return out
