@@ -328,6 +328,15 @@ def _alias_class(m: int, n_points: int, n_hi: int) -> set:
             if 0 <= c <= n_hi}
 
 
+def _seen_at(f_c: float, f_r: float, f, z, same) -> float:
+    """Where an order whose dispersion puts it at ``f_c`` (Hz) lies, seen from a mode at
+    ``f_r``: at the pole of one of the modes ``same`` (they read this mode's spatial order)
+    that has f_c in its own half-power band and lies nearer to f_c than f_r — the order's
+    own pole, the nearest such — else at f_c."""
+    at = [f[q] for q in same if abs(f[q] - f_c) < min(abs(f_r - f_c), 2 * z[q] * f[q])]
+    return min(at, key=lambda x: abs(x - f_c)) if at else f_c
+
+
 def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=None):
     """Modes whose order cannot be told: other orders that alias onto the same spatial
     order (n' ≡ ±n_s mod N) lie, by their branch's dispersion, within one half-power
@@ -336,14 +345,15 @@ def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair
     The branch's dispersion f(n) is the clear modes' (both confidences ≥ 0.5) frequencies
     against their orders, interpolated, and beyond the highest measured order continued
     with the last step's slope (the same-direction branch flattens under the sidewall
-    resonance, where many orders pile up). Candidates run up to 1.5 N. Where another order
-    c's mode lies is read from the dispersion, f(c), unless the estimator found a pole for
-    it apart from this one: a mode of the branch that holds c, or one that reads the same
-    spatial order (so may be any of its aliases) with f(c) inside its own half-power band
-    and nearer to f(c) than this mode (not the other member of this mode's split pair,
-    ``pair``: that is one order twice) — then c's mode is that pole, and c is a candidate
-    only when that pole lies within this mode's bandwidth (two poles of one spatial order
-    a bandwidth apart were resolved; their orders follow the branch's rise). Returns, per
+    resonance, where many orders pile up). Candidates run up to 1.5 N. An alias order that
+    another mode of the branch holds is no candidate (its pole was found apart from this
+    one, so the two were resolved). Nor is one whose own pole the estimator found more than
+    this mode's bandwidth away: a mode reading the same spatial order (so any of its aliases)
+    with the order's dispersion frequency f(c) in its own half-power band, nearer to f(c) than
+    this mode, is order c's pole (not when it is the other member of this mode's split pair,
+    ``pair``: one order twice), and c's mode lies there, not at the extrapolated f(c) (the
+    ring's n = 11 same at 159.4 Hz: its alias n = 23 extrapolated to 165.8 Hz, inside the
+    6.4 Hz band, found at 166.8 Hz, outside it). Returns, per
     mode, the sorted candidate orders (the mode's own included) when it is in a crowd, else ().
     """
     k = len(freq_hz)
@@ -373,15 +383,12 @@ def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair
             same = [q for q in others if n_spatial[q] in alias
                     and (pair is None or pair[q] is None or pair[q] != pair[r])]
 
-            def f_seen(c):
-                # where order c's mode lies: at a pole the estimator found apart from this one
-                # when one holds c, or reads this spatial order with c's dispersion frequency
-                # in its half-power band, nearer to it than this mode
-                at = [q for q in others if ns[q] == c]
-                at += [q for q in same if abs(f[q] - f_of(c)) < min(abs(f[r] - f_of(c)), 2 * z[q] * f[q])]
-                return min((f[q] for q in at), key=lambda x: abs(x - f_of(c))) if at else f_of(c)
+            # an alias order that another mode of the branch holds was resolved: the
+            # estimator found its pole apart from this one
+            held = {ns[q] for q in others if ns[q] != ns[r]}
 
-            near = sorted(c for c in alias if c == ns[r] or abs(f_seen(c) - f[r]) <= bw)
+            near = sorted(c for c in alias if abs(f_of(c) - f[r]) <= bw
+                          and (c == ns[r] or (c not in held and abs(_seen_at(f_of(c), f[r], f, z, same) - f[r]) <= bw)))
             if len(near) > 1:
                 out[r] = tuple(int(c) for c in near)
     return out
