@@ -148,8 +148,9 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     reads = _partners_branches(freq_hz, reads, ns)
     reads = _other_branch(freq_hz, reads, ns, in_order, n_p)
     pairs = _split_pairs(freq_hz, reads, ns, in_order)
+    on_branch = [o.sure and (in_order[r] or ns[r] == o.n_spatial) for r, o in enumerate(reads)]
     crowd = _crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads],
-                    [o.sure for o in reads], n_p, [p[0] for p in pairs])
+                    on_branch, n_p, [p[0] for p in pairs])
     n_top = max_order(n_p)
     res = []
     for r, o in enumerate(reads):
@@ -342,10 +343,14 @@ def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair
     order (n' ≡ ±n_s mod N) lie, by their branch's dispersion, within one half-power
     bandwidth 2ζf of the mode.
 
-    The branch's dispersion f(n) is the clear modes' (both confidences ≥ 0.5) frequencies
-    against their orders, interpolated, and beyond the highest measured order continued
-    with the last step's slope (the same-direction branch flattens under the sidewall
-    resonance, where many orders pile up). Candidates run up to 1.5 N. An alias order that
+    The branch's dispersion f(n) is the frequencies of the modes ``clear`` (both confidences
+    ≥ 0.5; :func:`classify` leaves out a mode read as an alias that falls out of its branch's
+    order: the walk inferred that order for a mode on the branch, and it is not on it — a
+    cavity mode at 254 Hz read n = 38, a leak at 625 Hz read n = 37, which the running
+    maximum would lift to the branch's top, flattening it) against their orders,
+    interpolated, and beyond the highest measured order continued with the last step's
+    slope (the same-direction branch flattens under the sidewall resonance, where many
+    orders pile up). Candidates run up to 1.5 N. An alias order that
     another mode of the branch holds is no candidate (its pole was found apart from this
     one, so the two were resolved). Nor is one whose own pole the estimator found more than
     this mode's bandwidth away: a mode reading the same spatial order (so any of its aliases)
