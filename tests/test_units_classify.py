@@ -171,6 +171,38 @@ def test_an_alias_out_of_order_does_not_flatten_the_dispersion():
     assert not res[6].aliased and res[6].n_confidence == pytest.approx(alone[6].n_confidence, abs=1e-12)
 
 
+def test_an_alias_order_seen_as_its_own_pole_a_bandwidth_away_is_no_crowd():
+    """12 points, ζ = 0.02; the in-phase branch f(1…6) = 100, 140, 160, 170, 171.5, 173 Hz
+    (n = 5, 6 weak, as in a crowd) continued with 1.5 Hz per order puts n = 8, the alias
+    12 − 4 of n = 4, at 176 Hz: 6 Hz from the n = 4 mode at 170 Hz, inside its 2ζf = 6.8 Hz.
+    But the estimator found n = 8's mode itself, a pole reading spatial order 4 (its branch
+    barely readable) at 177.5 Hz, 7.5 Hz from n = 4: the two were resolved and n = 4 is no
+    crowd. With that pole at 175 Hz (5 Hz away, inside the band) n = 4 is (4, 8)."""
+    th = _grid(12)
+    modes = [(1, 0.5), (2, 0.5), (3, 0.5), (4, 0.5), (5, 0.5), (6, 0.5), (8, 0.5 * np.exp(1.3j))]
+    S = _shapes(th, modes)
+    sig = [0.9, 0.9, 0.9, 0.9, 0.2, 0.2, 0.1]
+    for f_q, crowd in ((177.5, ()), (175.0, (4, 8))):
+        res = classify([100.0, 140.0, 160.0, 170.0, 171.5, 173.0, f_q], S, th, LOCS, significance=sig,
+                       damping_ratio=[0.02] * 7)
+        assert res[6].n_spatial == 4 and res[6].branch_confidence < 0.5
+        assert res[3].n == 4 and res[3].n_candidates == crowd
+
+
+def test_a_misread_alias_out_of_the_branch_order_does_not_flatten_its_dispersion():
+    """12 points, ζ = 0.06; a branch rising 20 Hz per order, f(n) = 100 + 20 n (n = 1…6). A weak
+    mode at 190 Hz reading spatial order 1 (order 1 held at 120 Hz) is read as the alias 11,
+    and lies below n = 5 and 6: out of the branch's order, a misread. Kept in the dispersion
+    it would lift f(7…11) to 220 Hz, inside the n = 5 mode's 2ζf = 24 Hz (a crowd (5, 7));
+    by the branch's rise n = 7 lies at 240 Hz, 40 Hz away: no crowd."""
+    th = _grid(12)
+    S = _shapes(th, [(1, 0.5), (2, 0.5), (3, 0.5), (4, 0.5), (1, 0.5), (5, 0.5), (6, 0.5)])
+    f = [120.0, 140.0, 160.0, 180.0, 190.0, 200.0, 220.0]
+    res = classify(f, S, th, LOCS, significance=[0.9, 0.9, 0.9, 0.9, 0.1, 0.9, 0.9], damping_ratio=[0.06] * 7)
+    assert res[4].n == 11 and not res[4].in_order
+    assert res[5].n == 5 and not res[5].crowd and res[5].n_confidence == pytest.approx(1.0, abs=1e-9)
+
+
 def test_grid_top_order_is_read_on_a_uniform_grid_from_any_start():
     th = _grid(12, offset=0.2)
     S = _shapes(th, [(6, 0.5)])
