@@ -262,6 +262,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1277 / 1334 (96 %) | 18 / 1632 (1.1 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-24, end of session 10 | a free rim's second n = 1 read as n = 1, and the ruler's "rim" modes found by their order on either branch; a grid with failed points read a second time with the found modes' leaks taken out; a wandering leak dropped whatever its peak, leak twins; a broad weak mode's scatter judged against its Cramér–Rao bound (#14) | paper | 1153 / 1212 (95 %) | 24 / 1436 (1.7 %) | 0 | 14 / 14 | 13 / 13 | 2.3 min |
 | | | ring | 1289 / 1334 (97 %) | 11 / 1627 (0.7 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-24, end of session 11 | a crowd candidate judged at its own pole when the estimator found it, and no misread alias in a branch's dispersion; with failed points a mode tested against the noise and leak copies within both half-power half-widths; pole refinement on near the band's edges (#14) | paper | 1155 / 1212 (95 %) | 22 / 1436 (1.5 %) | 0 | 14 / 14 | 13 / 13 | 2.4 min |
+| | | ring | 1295 / 1334 (97 %) | 9 / 1626 (0.6 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
