@@ -30,7 +30,7 @@ from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import pole_basis, synthesize
 from tiremodal_cli.modal.spatial import decompose, grid_design
 
-__all__ = ["order_lsfd", "cleaned_groups", "weak_in_frfs"]
+__all__ = ["order_lsfd", "order_design", "cleaned_groups", "weak_in_frfs"]
 
 
 def order_lsfd(freq_hz, Hb, angles_rad, poles, orders, form: str = "accelerance") -> np.ndarray:
@@ -64,19 +64,35 @@ def order_lsfd(freq_hz, Hb, angles_rad, poles, orders, form: str = "accelerance"
     Q, R = np.linalg.qr(Ar / scale)  # (2K, nb), (nb, nb)
     Y = np.concatenate([Hb.real, Hb.imag], axis=2).reshape(n_c * n_p, 2 * K)
     Z = (Y @ Q).reshape(n_c, n_p, -1).transpose(1, 2, 0)  # (n_p, nb, n_c)
-    units = [(r, k) for r in range(M) for k, (n, _) in enumerate(names) if n in orders[r]]
-    nb, nu = R.shape[0], len(units)
+    G, units = order_design(D, [[k for k, (n, _) in enumerate(names) if n in orders[r]] for r in range(M)], R, M)
+    x = scipy.linalg.lstsq(G, Z.reshape(-1, n_c), lapack_driver="gelsy")[0]
+    nu = len(units)
+    X = np.zeros((M, len(names), n_c), dtype=complex)
+    for u, (r, k) in enumerate(units):
+        X[r, k] = x[u] / scale[r] + 1j * x[nu + u] / scale[M + r]
+    return X
+
+
+def order_design(D, cols, R, M: int) -> tuple:
+    """The design of the order-held LSFD on the lines reduced by the pole basis's QR factor.
+
+    D : (n_p, n_cols) the grid's columns at the points ; cols : per pole, its columns ; R :
+    (nb, nb) the triangular factor of the scaled pole basis (the M poles' Re and Im columns,
+    then the lower and upper residual terms) ; M : the number of poles.
+
+    Returns G : (n_p · nb, 2 n_u + 2 n_p) real (each unit's Re and Im residue, then each
+    point's residual terms) and the units [(pole, column)].
+    """
+    n_p, nb = D.shape[0], R.shape[0]
+    units = [(r, k) for r in range(M) for k in cols[r]]
+    nu = len(units)
     G = np.zeros((n_p, nb, 2 * nu + 2 * n_p))
     for u, (r, k) in enumerate(units):
         G[:, :, u] = D[:, k, None] * R[None, :, r]
         G[:, :, nu + u] = D[:, k, None] * R[None, :, M + r]
     for p in range(n_p):
         G[p, :, 2 * nu + 2 * p:2 * nu + 2 * p + 2] = R[:, 2 * M:2 * M + 2]
-    x = scipy.linalg.lstsq(G.reshape(n_p * nb, -1), Z.reshape(n_p * nb, n_c), lapack_driver="gelsy")[0]
-    X = np.zeros((M, len(names), n_c), dtype=complex)
-    for u, (r, k) in enumerate(units):
-        X[r, k] = x[u] / scale[r] + 1j * x[nu + u] / scale[M + r]
-    return X
+    return G.reshape(n_p * nb, -1), units
 
 
 def cleaned_groups(freq_hz, Hb, angles_rad, poles, orders, form: str = "accelerance") -> dict:

@@ -22,6 +22,7 @@ from tiremodal_cli.modal.band import band_or_every_line, default_band, no_stable
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.gaps import cleaned_groups, weak_in_frfs
 from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
+from tiremodal_cli.modal.joint import add_missing_orders
 from tiremodal_cli.modal.refine import refine_adopted
 from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
@@ -150,9 +151,11 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
                                 [set(m.order_energy) for m in modes])
         diagrams, modes, rejected, synth, kept = _modes_of_groups(band, groups, point_angle, spatial, gaps,
                                                                   group_max, opt, progress)
-    if gaps:
+    if gaps:  # the branches' unfound orders, refined jointly with the modes found (modal.joint)
+        locs = [tuple(channel_location)[i] for i in np.flatnonzero(band.live)] if len(channel_location) else []
+        modes, synth, proposed = add_missing_orders(band.freq, band.Hb, point_angle, locs, modes, synth)
         modes, weak = weak_in_frfs(modes, opt.min_significance, band.freq, point_angle, band.flat - synth)
-        rejected += weak
+        rejected += proposed + weak
     modes, edge = off_edges(modes, band.freq[0], band.freq[-1], exp_tau_s)
     if not modes:
         raise no_stable_mode(band.freq, group_max)

@@ -28,7 +28,7 @@ original (:data:`MAX_SHIFT_HALF_WIDTHS`; ends on the box's edge: the minimum lie
 elsewhere, on another mode), its damping within a factor :data:`MAX_DAMPING_FACTOR` — and
 when the group's poles keep their order and stay more than one line apart (no swap, no
 merge). Otherwise the set keeps its original poles. The solver's Jacobian is taken by
-forward differences with an absolute step (:func:`_jacobian`; scipy's relative step is
+forward differences with an absolute step (:func:`forward_jacobian`; scipy's relative step is
 √ε at θ = 0, below the projection's rounding noise, and the solver stopped where it
 started: the refinement measured in session 10 had moved almost nothing).
 
@@ -55,7 +55,8 @@ import scipy.optimize
 from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.modal.lsce import poles_to_modal
 
-__all__ = ["MAX_DAMPING_FACTOR", "MAX_SHIFT_HALF_WIDTHS", "WINDOW_HALF_WIDTHS", "refine_poles", "refine_adopted"]
+__all__ = ["MAX_DAMPING_FACTOR", "MAX_SHIFT_HALF_WIDTHS", "WINDOW_HALF_WIDTHS", "forward_jacobian", "moved_poles",
+           "refine_poles", "refine_adopted"]
 
 #: the window: lines within this many half-power half-widths of a refined pole (its
 #: half-power band and as much again on each flank, where the phase still turns)
@@ -133,7 +134,7 @@ def _stack(rows, n_ref):
     return rows.reshape(n_ref, n_c, -1).transpose(0, 2, 1).reshape(-1, n_c)
 
 
-def _poles(theta, s0, idx):
+def moved_poles(theta, s0, idx):
     """The poles with the set ``idx`` moved by ``theta`` = (Δω / half-width, ln σ/σ₀)."""
     s = s0.copy()
     m = idx.size
@@ -142,7 +143,7 @@ def _poles(theta, s0, idx):
     return s
 
 
-def _jacobian(fun, theta, step=JACOBIAN_STEP):
+def forward_jacobian(fun, theta, step=JACOBIAN_STEP):
     """(n_res, n_θ) forward differences of ``fun`` at ``theta`` with an absolute step (in
     the box).
 
@@ -183,19 +184,19 @@ def _refine_set(freq, rows, weight, s, s_orig, L, idx, q):
     loc = np.arange(idx.size)
 
     def fun(theta):
-        return _projection_residual(_basis(jw, _poles(theta, s_use, loc), L_use, q), Y)
+        return _projection_residual(_basis(jw, moved_poles(theta, s_use, loc), L_use, q), Y)
 
     m = idx.size
     hw0 = -s_orig[idx].real
     x0 = np.concatenate([(s[idx].imag - s_orig[idx].imag) / hw0, np.log(s[idx].real / s_orig[idx].real)])
     bound = np.concatenate([np.full(m, MAX_SHIFT_HALF_WIDTHS), np.full(m, np.log(MAX_DAMPING_FACTOR))])
     r0 = fun(x0)
-    sol = scipy.optimize.least_squares(fun, x0, jac=lambda th: _jacobian(fun, th), bounds=(-bound, bound),
+    sol = scipy.optimize.least_squares(fun, x0, jac=lambda th: forward_jacobian(fun, th), bounds=(-bound, bound),
                                        x_scale=0.1, max_nfev=40 * m)
     if not sol.x.size or np.any(np.abs(sol.x) >= 0.98 * bound) or 2 * sol.cost >= float(r0 @ r0):
         return None
     out = s.copy()
-    out[use] = _poles(sol.x, s_use, loc)
+    out[use] = moved_poles(sol.x, s_use, loc)
     return out
 
 
