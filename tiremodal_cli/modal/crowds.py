@@ -105,14 +105,28 @@ def saturating_dispersion(orders, freq_hz):
 
 def branch_dispersion(orders, freq_hz, branch):
     """A branch's f(n) (Hz) from its clear modes (orders, frequencies): interpolated between
-    them (made to rise: the running maximum), and beyond the highest continued with the last
-    step's slope — on the in-phase branch by the larger of that and the saturating law
-    (:func:`saturating_dispersion`). Each errs low where its premise fails: the last step,
-    when the top orders are the crowd's members biased towards it (the ring's n = 16 → 17 at
-    0.1 Hz per order against the truth's 0.45); the law, when the sidewall's stiffness rises
-    with n (a sidewall membrane: the branch keeps rising, 3 Hz per order); and an order put
-    too low is a false crowd (a right label lost), put too high a crowd missed (the label
-    kept, as the order's own reading). None with fewer than two orders."""
+    them (made to rise: the running maximum), and beyond the highest continued — on the
+    in-phase branch by the saturating law (:func:`saturating_dispersion`) when it describes
+    the branch (its residual at the highest clear mode not below minus its rms residual over
+    the orders n ≥ 2: that mode no outlier above the law), else by the larger of the law and
+    the last step's slope; on the other branch by the last step's slope. Each errs low where
+    its premise fails: the last step when the top orders are the crowd's members biased
+    towards it (the ring's n = 16 → 17 at 0.1 Hz per order against the truth's 0.45), the law
+    when the sidewall's stiffness rises with n (a sidewall membrane: the branch keeps rising,
+    3 Hz per order, and the law falls below its top modes); an order put too low is a false
+    crowd (a right label lost), put too high a crowd missed (the label kept, as the order's
+    own reading). None with fewer than two orders.
+
+    Parameters
+    ----------
+    orders : sequence of int         the clear modes' orders (one frequency per order)
+    freq_hz : sequence of float, Hz
+    branch : str                     "same" (the in-phase branch) or another
+
+    Returns
+    -------
+    callable n -> f (Hz), or None
+    """
     pts = sorted(dict(zip(orders, freq_hz)).items())
     if len(pts) < 2:
         return None
@@ -120,12 +134,19 @@ def branch_dispersion(orders, freq_hz, branch):
     ff = np.maximum.accumulate(np.array([p[1] for p in pts]))  # f(n) rises along a branch
     slope = max(0.0, (ff[-1] - ff[-2]) / max(nn[-1] - nn[-2], 1.0))
     sat = saturating_dispersion(nn, [p[1] for p in pts]) if branch == SAME else None
+    alone = False
+    if sat is not None:
+        k2 = nn >= 2  # the orders the law was fitted to
+        res = np.array([sat(q) for q in nn[k2]]) - np.array([p[1] for p in pts])[k2]
+        alone = bool(res[-1] >= -np.sqrt(np.mean(res**2)))
 
     def f_of(n):
         if n <= nn[-1]:
             return float(np.interp(n, nn, ff))
         line = float(ff[-1] + slope * (n - nn[-1]))
-        return max(line, sat(n)) if sat is not None else line
+        if sat is None:
+            return line
+        return sat(n) if alone else max(line, sat(n))
     return f_of
 
 
