@@ -21,11 +21,17 @@ between orders: the leaks). For a ``paper`` case of the validation matrix this s
    leaks the generator's model predicts with that mass (the difference between its
    coupled modes' FRFs and theirs on their own orders), before noise: approach (a) with
    everything but the mass exact.
+5. with ``--fit-shapes RUN``, estimates (m_a, θ_a) from a kept run's measured order-group
+   FRFs in the band (the diagnosed model with the mass, the paper's damping law: the most
+   favourable case for the estimate).
 
 Usage::
 
     python benchmarks/mass_leaks.py paper:physics=added_mass --band 140 200
     python benchmarks/mass_leaks.py paper:physics=added_mass --oracle 0 0.25 1 --keep /tmp/ml
+    python benchmarks/mass_leaks.py paper:physics=added_mass --subtract 0.4 0 --subtract 0.5 2
+    python benchmarks/mass_leaks.py paper:physics=added_mass --band 178 198 \\
+        --fit-shapes /tmp/m2/paper_physics-added_mass/run
 """
 
 from __future__ import annotations
@@ -36,13 +42,15 @@ import sys
 from contextlib import contextmanager
 from pathlib import Path
 
+import h5py
 import numpy as np
+from scipy.optimize import minimize
 from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tiremodal_cli.tyre.effects import get_effect  # noqa: E402
-from tiremodal_cli.tyre.model import paper_damping  # noqa: E402
+from tiremodal_cli.tyre.model import TyreParameters, paper_damping  # noqa: E402
 from tiremodal_cli.tyre.solve import frf, observation, solve_modes  # noqa: E402
 from tiremodal_cli.tyre import simulate as SIM  # noqa: E402
 from tiremodal_cli.workflow import validation as V  # noqa: E402
@@ -186,6 +194,47 @@ def subtracted(case, m_a: float, theta_a: float, keep: Path) -> dict:
     return {"m_a": m_a, "theta_a_deg": float(np.degrees(theta_a))} | {k: rec.get(k) for k in keys}
 
 
+def _measured_groups(run: Path, band):
+    """The run's measured order-group FRFs (tread, sidewall) in ``band``: (G (2, N//2+1, n_f), f, angles, τ)."""
+    with h5py.File(run / "frf.h5", "r") as f:
+        fr = f["freq_hz"][:]
+        sel = (fr >= band[0]) & (fr <= band[1])
+        ang, tau = f["point_angle"][:], float(f.attrs["exp_tau_s"])
+        H = f["frf"][:2][:, :, sel]
+    n = len(ang)
+    return (np.fft.fft(H, axis=1) / n)[:, : n // 2 + 1], fr[sel], ang, tau
+
+
+def fit_mass_from_shapes(run: Path, band=(178.0, 198.0), *, step_kg: float = 0.1, step_deg: float = 10.0) -> dict:
+    """(m_a, θ_a) that make the diagnosed model's order-group FRFs, with the mass, match the
+    measured ones in ``band`` (one free complex scale per channel; the paper's damping law
+    plus the exponential window's 1/(ωτ)): a grid, then Nelder–Mead. The mass read from
+    the shapes, not from the frequencies."""
+    Gm, fr, ang, tau = _measured_groups(run, band)
+    diag = json.loads((run / "diagnosis.json").read_text(encoding="utf-8"))
+    p = TyreParameters.from_mapping({k: v for k, v in diag["augmented"]["all_parameters"].items() if v is not None})
+    eff = dict(diag["augmented"]["effects"])
+    n = len(ang)
+
+    def cost(x):
+        m = solve_modes(p, n_max=60, effects=eff | {"added_mass": {"m_a": x[0], "theta_a": x[1]}})
+        z = np.array([paper_damping(int(k), b) for k, b in zip(m.n, m.branch)])
+        z = z + 1.0 / (2 * np.pi * np.maximum(m.freq_hz, 1.0) * tau)
+        g = (np.fft.fft(frf(m, fr, z, ["tread", "sidewall"], np.zeros(2), ang), axis=1) / n)[:, : n // 2 + 1]
+        c = 0.0
+        for ch in range(2):
+            a = np.vdot(g[ch], Gm[ch]) / np.vdot(g[ch], g[ch])
+            c += np.linalg.norm(Gm[ch] - a * g[ch]) ** 2 / np.linalg.norm(Gm[ch]) ** 2
+        return c / 2
+
+    grid = [(cost((m_a, th)), m_a, th) for m_a in np.arange(0.0, 1.5 + 1e-9, step_kg)
+            for th in np.radians(np.arange(-180.0, 180.0, step_deg))]
+    c0, m0, t0 = min(grid)
+    res = minimize(cost, [m0, t0], method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 1e-9})
+    return {"run": str(run), "m_a_kg": float(res.x[0]), "theta_a_deg": float(np.degrees(res.x[1])),
+            "cost": float(res.fun), "cost_without_mass": float(cost((0.0, 0.0)))}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("case", help="a paper case of the matrix with an added mass, e.g. paper:physics=added_mass")
@@ -193,6 +242,8 @@ def main(argv=None) -> int:
     ap.add_argument("--oracle", nargs="*", type=float, default=[], metavar="S")
     ap.add_argument("--subtract", nargs=2, type=float, action="append", default=[], metavar=("M_A", "THETA_DEG"),
                     help="subtract the leaks predicted with this mass (kg) at this angle (deg); repeatable")
+    ap.add_argument("--fit-shapes", type=Path, metavar="RUN",
+                    help="a kept run folder of the case: estimate (m_a, θ_a) from its order-group FRFs")
     ap.add_argument("--keep", type=Path, default=Path("/tmp/mass_leaks"))
     args = ap.parse_args(argv)
     case = next(c for c in V.matrix() if c.name == args.case)
@@ -204,6 +255,8 @@ def main(argv=None) -> int:
         print(json.dumps(row))
     for r in args.oracle:
         print(json.dumps(oracle(case, r, args.keep)), flush=True)
+    if args.fit_shapes:
+        print(json.dumps(fit_mass_from_shapes(args.fit_shapes, tuple(args.band))), flush=True)
     for m_a, deg in args.subtract:
         print(json.dumps(subtracted(case, m_a, np.radians(deg), args.keep)), flush=True)
     return 0
