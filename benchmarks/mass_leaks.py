@@ -230,7 +230,8 @@ def fit_mass_from_shapes(run: Path, band=(178.0, 198.0), *, step_kg: float = 0.1
     grid = [(cost((m_a, th)), m_a, th) for m_a in np.arange(0.0, 1.5 + 1e-9, step_kg)
             for th in np.radians(np.arange(-180.0, 180.0, step_deg))]
     c0, m0, t0 = min(grid)
-    res = minimize(cost, [m0, t0], method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 1e-9})
+    res = minimize(cost, [m0, t0], method="Nelder-Mead", bounds=[(0.0, 20.0), (None, None)],
+                   options={"xatol": 1e-4, "fatol": 1e-9})
     return {"run": str(run), "m_a_kg": float(res.x[0]), "theta_a_deg": float(np.degrees(res.x[1])),
             "cost": float(res.fun), "cost_without_mass": float(cost((0.0, 0.0)))}
 
