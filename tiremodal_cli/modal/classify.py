@@ -40,6 +40,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from tiremodal_cli.conventions import OPPOSITE, SAME
+from tiremodal_cli.modal.crowds import crowds
 from tiremodal_cli.modal.spatial import grid_design, grid_points, max_order
 
 __all__ = ["Classification", "classify"]
@@ -128,7 +129,7 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     point_angle : (n_points,) array, rad
     channel_location : sequence of str
     significance : (n_modes,) array, optional — only modes ≥ 0.3 move the alias mark
-    damping_ratio : (n_modes,) array, optional — for the crowd test (see :func:`_crowds`)
+    damping_ratio : (n_modes,) array, optional — for the crowd test (see :func:`tiremodal_cli.modal.crowds.crowds`)
     significance_group : (n_modes,) array, optional — each mode's share of the response in
         its own order group: a mode ≥ 0.3 there (but not in the physical FRFs) moves the
         alias mark only by continuing the branch (to at most two orders above the mark)
@@ -149,7 +150,7 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     reads = _other_branch(freq_hz, reads, ns, in_order, n_p)
     pairs = _split_pairs(freq_hz, reads, ns, in_order)
     on_branch = [o.sure and (in_order[r] or ns[r] == o.n_spatial) for r, o in enumerate(reads)]
-    crowd = _crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads],
+    crowd = crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads],
                     on_branch, n_p, [p[0] for p in pairs])
     n_top = max_order(n_p)
     res = []
@@ -320,80 +321,4 @@ def _split_pairs(freq_hz, reads: list[_Reading], ns: list[int], in_order) -> lis
             pid = min(members)
             split = float(abs(freq_hz[members[0]] - freq_hz[members[1]]))
         out.append((pid, split))
-    return out
-
-
-def _alias_class(m: int, n_points: int, n_hi: int) -> set:
-    """The orders 0 … n_hi that alias onto spatial order m on a grid of N points (j N ± m)."""
-    return {c for j in range(0, n_hi // max(n_points, 1) + 2) for c in (j * n_points - m, j * n_points + m)
-            if 0 <= c <= n_hi}
-
-
-def _seen_at(f_c: float, f_r: float, f, z, same) -> float:
-    """Where an order whose dispersion puts it at ``f_c`` (Hz) lies, seen from a mode at
-    ``f_r``: at the pole of one of the modes ``same`` (they read this mode's spatial order)
-    that has f_c in its own half-power band and lies nearer to f_c than f_r — the order's
-    own pole, the nearest such — else at f_c."""
-    at = [f[q] for q in same if abs(f[q] - f_c) < min(abs(f_r - f_c), 2 * z[q] * f[q])]
-    return min(at, key=lambda x: abs(x - f_c)) if at else f_c
-
-
-def _crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=None):
-    """Modes whose order cannot be told: other orders that alias onto the same spatial
-    order (n' ≡ ±n_s mod N) lie, by their branch's dispersion, within one half-power
-    bandwidth 2ζf of the mode.
-
-    The branch's dispersion f(n) is the frequencies of the modes ``clear`` (both confidences
-    ≥ 0.5; :func:`classify` leaves out a mode read as an alias that falls out of its branch's
-    order: the walk inferred that order for a mode on the branch, and it is not on it — a
-    cavity mode at 254 Hz read n = 38, a leak at 625 Hz read n = 37, which the running
-    maximum would lift to the branch's top, flattening it) against their orders,
-    interpolated, and beyond the highest measured order continued with the last step's
-    slope (the same-direction branch flattens under the sidewall resonance, where many
-    orders pile up). Candidates run up to 1.5 N. An alias order that
-    another mode of the branch holds is no candidate (its pole was found apart from this
-    one, so the two were resolved). Nor is one whose own pole the estimator found more than
-    this mode's bandwidth away: a mode reading the same spatial order (so any of its aliases)
-    with the order's dispersion frequency f(c) in its own half-power band, nearer to f(c) than
-    this mode, is order c's pole (not when it is the other member of this mode's split pair,
-    ``pair``: one order twice), and c's mode lies there, not at the extrapolated f(c) (the
-    ring's n = 11 same at 159.4 Hz: its alias n = 23 extrapolated to 165.8 Hz, inside the
-    6.4 Hz band, found at 166.8 Hz, outside it). Returns, per
-    mode, the sorted candidate orders (the mode's own included) when it is in a crowd, else ().
-    """
-    k = len(freq_hz)
-    out = [()] * k
-    if damping_ratio is None or k == 0:
-        return out
-    f = np.asarray(freq_hz, dtype=float)
-    z = np.asarray(damping_ratio, dtype=float)
-    n_hi = int(1.5 * n_points)
-    for br in {b for b in branch if b is not None}:
-        pts = sorted({ns[r]: f[r] for r in range(k) if branch[r] == br and clear[r]}.items())
-        if len(pts) < 2:
-            continue
-        nn = np.array([p[0] for p in pts], dtype=float)
-        ff = np.maximum.accumulate(np.array([p[1] for p in pts]))  # f(n) rises along a branch
-        slope = max(0.0, (ff[-1] - ff[-2]) / max(nn[-1] - nn[-2], 1.0))
-
-        def f_of(n):
-            return float(np.interp(n, nn, ff)) if n <= nn[-1] else float(ff[-1] + slope * (n - nn[-1]))
-
-        for r in range(k):
-            if branch[r] != br:
-                continue
-            alias = _alias_class(n_spatial[r], n_points, n_hi)
-            bw = 2 * z[r] * f[r]
-            others = [q for q in range(k) if q != r and branch[q] == br]
-            same = [q for q in others if n_spatial[q] in alias
-                    and (pair is None or pair[q] is None or pair[q] != pair[r])]
-
-            # an alias order that another mode of the branch holds was resolved: the
-            # estimator found its pole apart from this one
-            held = {ns[q] for q in others if ns[q] != ns[r]}
-
-            near = sorted(c for c in alias if abs(f_of(c) - f[r]) <= bw
-                          and (c == ns[r] or (c not in held and abs(_seen_at(f_of(c), f[r], f, z, same) - f[r]) <= bw)))
-            if len(near) > 1:
-                out[r] = tuple(int(c) for c in near)
     return out

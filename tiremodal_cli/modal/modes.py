@@ -23,7 +23,7 @@ from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.gaps import cleaned_groups, weak_in_frfs
 from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
 from tiremodal_cli.modal.joint import add_missing_orders
-from tiremodal_cli.modal.refine import refine_adopted
+from tiremodal_cli.modal.refine import dropped_poles, refine_adopted
 from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
 from tiremodal_cli.modal.lsfd import mpc
@@ -279,7 +279,8 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
     """One order group: its stabilization diagram, its modes (GroupMode), the poles dropped
     after LSFD, its synthesis in the physical FRFs, and (with ``opt.refine``; else None)
     what :func:`_refine_adopted` needs: (data, kept poles, their participation, the fit's
-    synthesis in the group's rows)."""
+    synthesis in the group's rows, the poles the fit dropped and their participation —
+    :func:`~tiremodal_cli.modal.refine.dropped_poles`)."""
     b = principal_responses(data.freq, data.rows, None, rtol=data.opt.rtol_svd)
     d = stabilize(b, _group_poles(data, b, spatial, group_max), data.opt.stabilization)
     s = np.array([c.representative.s for c in d.selected()], dtype=complex)
@@ -300,8 +301,9 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
              for k in range(s.size)]
     if not data.opt.refine:
         return d, modes, rej, data.back @ fit.synthesis, None
-    L = np.array([parts[list(s0).index(p)] for p in s]) if all(pt is not None for pt in parts) else None
-    return d, modes, rej, data.back @ fit.synthesis, (data, s, L, fit.synthesis)
+    P = np.array(parts) if all(pt is not None for pt in parts) else None
+    L = None if P is None else np.array([P[list(s0).index(p)] for p in s])
+    return d, modes, rej, data.back @ fit.synthesis, (data, s, L, fit.synthesis) + dropped_poles(s0, P, s, data.freq)
 
 
 def _result(band: _Band, shape, modes, synth, exp_tau_s, *, diagrams, rejected, meta) -> ModalResult:

@@ -36,7 +36,8 @@ class ModalOptions:
               (:mod:`.refine`; docs/lsce.md, "Pole refinement": near the edges LSCE biases
               modes by up to 0.9 %; in the band's middle, where an added mass mixes the
               orders, the group's rows are no complete model and refining there moved
-              right modes off)
+              right modes off), and the weak poles (kept by the own-peak rule) with
+              their group's dropped poles held in the basis (session 12)
     """
 
     band_hz: tuple[float, float] | None = None

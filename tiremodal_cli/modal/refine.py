@@ -32,11 +32,15 @@ forward differences with an absolute step (:func:`forward_jacobian`; scipy's rel
 √ε at θ = 0, below the projection's rounding noise, and the solver stopped where it
 started: the refinement measured in session 10 had moved almost nothing).
 
-Which poles (:func:`refine_adopted`): only those within :data:`EDGE_HALF_WIDTHS` half-power
-half-widths of a band edge, where LSCE's band-limited model errs; and a moved pole is kept
+Which poles (:func:`refine_adopted`): those within :data:`EDGE_HALF_WIDTHS` half-power
+half-widths of a band edge, where LSCE's band-limited model errs, and (session 12) the weak
+ones — under ``min_significance`` of the response, kept by the own-peak rule — of a group
+whose fit dropped other stable poles, refined with those poles held in the basis
+(:func:`dropped_poles`: a weak pole's bias is what its group's fit leaves out, above all
+its group's other aliases of its branch, dropped as weak themselves); a moved pole is kept
 only where it also fits the physical FRFs better (every adopted pole near it in the basis,
-a free residue per FRF: the model the group's rows lack where an added mass mixes the
-orders).
+and for a weak pole every group's dropped poles, a free residue per FRF: the model the
+group's rows lack where an added mass mixes the orders).
 
 References
 ----------
@@ -55,8 +59,8 @@ import scipy.optimize
 from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.modal.lsce import poles_to_modal
 
-__all__ = ["MAX_DAMPING_FACTOR", "MAX_SHIFT_HALF_WIDTHS", "WINDOW_HALF_WIDTHS", "forward_jacobian", "moved_poles",
-           "refine_poles", "refine_adopted"]
+__all__ = ["MAX_DAMPING_FACTOR", "MAX_SHIFT_HALF_WIDTHS", "WINDOW_HALF_WIDTHS", "dropped_poles", "forward_jacobian",
+           "moved_poles", "refine_poles", "refine_adopted"]
 
 #: the window: lines within this many half-power half-widths of a refined pole (its
 #: half-power band and as much again on each flank, where the phase still turns)
@@ -247,33 +251,79 @@ def refine_poles(freq, rows, synthesis, s, L=None, *, form="accelerance", free=N
     return out
 
 
+def dropped_poles(s0, P, kept, freq) -> tuple:
+    """The stable poles of a group its fit dropped, as nuisance poles for
+    :func:`refine_adopted`: those farther than max(ζ f, one line) from every kept pole (a
+    copy of a kept mode is no other mode) and than a line from each other.
+
+    s0 : (m0,) complex, the group's stable poles ; P : (m0, n_ref) complex or None, their
+    participation ; kept : (m,) complex, the poles kept ; freq : (K,) Hz, the lines.
+    Returns (poles (r,) complex, participation (r, n_ref) or None).
+    """
+    fk, zk = poles_to_modal(np.asarray(kept, dtype=complex))
+    f0 = poles_to_modal(np.asarray(s0, dtype=complex))[0]
+    df = freq[1] - freq[0]
+    take = []
+    for i in [i for i, p in enumerate(s0) if not np.any(kept == p)]:
+        if np.all(np.abs(fk - f0[i]) > np.maximum(zk * fk, df)) and np.all(np.abs(f0[take] - f0[i]) > df):
+            take.append(i)
+    return np.asarray(s0, dtype=complex)[take], (None if P is None else np.asarray(P)[np.array(take, dtype=int)])
+
+
+def _refine_group(modes, mine, data, s, L, synth_g, s_rej, L_rej):
+    """One group's poles refined: those near a band edge as :func:`refine_poles` does, then
+    the weak ones (share under ``min_significance``) with the group's dropped poles held in
+    the basis. Returns ((m,) refined poles, (m,) bool: moved as a weak pole)."""
+    free = np.zeros(s.size, dtype=bool)
+    free[list(mine.values())] = True
+    fn, zeta = poles_to_modal(s)
+    edge = free & (np.minimum(fn - data.freq[0], data.freq[-1] - fn) / (zeta * fn) <= EDGE_HALF_WIDTHS)
+    weak = np.zeros(s.size, dtype=bool)
+    for i, k in mine.items():
+        weak[k] = max(modes[i].significance, modes[i].significance_in_group) < data.opt.min_significance
+    weak &= free & ~edge & (s_rej.size > 0)
+    s_new = refine_poles(data.freq, data.rows, synth_g, s, L, form=data.form, free=edge) if edge.any() else s
+    if weak.any():
+        L_all = None if L is None else np.vstack([L, L_rej])
+        s_new = refine_poles(data.freq, data.rows, synth_g, np.concatenate([s_new, s_rej]), L_all, form=data.form,
+                             free=np.concatenate([weak, np.zeros(s_rej.size, dtype=bool)]))[:s.size]
+    return s_new, weak
+
+
 def refine_adopted(modes: list, kept: dict, synthesis=None) -> list:
     """The merged modes with each pole refined against its dominant group's rows
     (:func:`refine_poles`; the group's other kept poles, the copies the merge dropped among
     them, held fixed). The shapes stay the group fits' (a pole moves by a fraction of its
     half-power half-width). ``kept`` : {group: (GroupData, poles (m,), participation (m,
-    n_h) or None, the group fit's synthesis)}. With ``synthesis`` ((n_frf, K) complex, the
-    physical FRFs' fit) a moved pole is kept only where it also fits the physical FRFs
-    better (:func:`_physical_residual`)."""
+    n_h) or None, the group fit's synthesis, the poles the fit dropped (r,) and their
+    participation (r, n_h) or None — :func:`dropped_poles`)}. With ``synthesis`` ((n_frf,
+    K) complex, the physical FRFs' fit) a moved pole is kept only where it also fits the
+    physical FRFs better (:func:`_physical_residual`; for a weak pole, with every group's
+    dropped poles in the basis too).
+
+    Refined: the poles within :data:`EDGE_HALF_WIDTHS` of a band edge, and the weak ones
+    (share of the response under ``min_significance``: kept by the own-peak rule) of a
+    group that dropped other poles. A weak pole is biased by what its group's fit leaves
+    out — above all its group's other aliases of its branch, dropped as weak themselves
+    (docs/lsce.md, "Known limit", session 12: the paper's sidewall same n = 45 at 298.91 Hz,
+    +0.32 %, refitted with its group's dropped n = 57 pole at 354.76 Hz in the basis, has
+    its least-squares optimum at 297.91 Hz, −0.02 %); refined without them it moves the
+    wrong way (n = 47: 306.05 → 304.29 Hz, truth 307.09).
+    """
     out = list(modes)
-    for g, (data, s, L, synth_g) in kept.items():
+    rej_all = np.concatenate([k[4] for k in kept.values()]) if kept else np.zeros(0, dtype=complex)
+    for g, (data, s, L, synth_g, s_rej, L_rej) in kept.items():
         mine = {i: int(np.flatnonzero(s == m.pole)[0]) for i, m in enumerate(modes)
                 if m.group == g and np.any(s == m.pole)}
         if not mine:
             continue
-        free = np.zeros(s.size, dtype=bool)
-        free[list(mine.values())] = True
-        fn, zeta = poles_to_modal(s)
-        edge = np.minimum(fn - data.freq[0], data.freq[-1] - fn) / (zeta * fn)
-        free &= edge <= EDGE_HALF_WIDTHS
-        if not free.any():
-            continue
-        s_new = refine_poles(data.freq, data.rows, synth_g, s, L, form=data.form, free=free)
+        s_new, weak = _refine_group(modes, mine, data, s, L, synth_g, s_rej, L_rej)
         for i, k in mine.items():
             if s_new[k] == s[k]:
                 continue
             if synthesis is not None:
                 poles = np.array([m.pole for m in out])
+                poles = np.concatenate([poles, rej_all]) if weak[k] else poles
                 moved = poles.copy()
                 moved[i] = s_new[k]
                 if _physical_residual(data, synthesis, moved, i) >= _physical_residual(data, synthesis, poles, i):

@@ -1,0 +1,105 @@
+"""The crowd test's continuation of the in-phase branch (:mod:`tiremodal_cli.modal.crowds`).
+
+Truths used: the seed model's closed form (MODEL.md, ``closed_form_hz``, with its n⁴ bending
+term, which the saturating law leaves out) and the independent finite-element ring
+(``ring_modes``, the matrix's ``ring`` generator at its default parameters); a mode is in a
+crowd when another order aliasing onto it (N ± n on N points) lies within its half-power
+bandwidth 2ζf on the branch's true dispersion (the ruler's definition).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tiremodal_cli.modal.classify import classify
+from tiremodal_cli.modal.crowds import branch_dispersion, saturating_dispersion
+from tiremodal_cli.tyre.effects import resolve_effects
+from tiremodal_cli.tyre.frequencies import branch_frequencies
+from tiremodal_cli.tyre.model import TyreParameters, closed_form_hz
+from tiremodal_cli.tyre.ring import ring_modes
+from tiremodal_cli.tyre.ring_parameters import RingParameters
+
+
+@pytest.fixture(scope="module")
+def ring_same():
+    """{n: f (Hz)} of the finite-element ring's in-phase branch (its lowest mode of each order)."""
+    m = ring_modes(RingParameters(), f_max_hz=175)
+    out = {}
+    for f, n, b in zip(m.freq_hz, m.n, m.branch):
+        if b == "same":
+            out.setdefault(int(n), float(f))
+    return out
+
+
+def test_the_saturating_law_continues_both_generators_in_phase_branch():
+    """Fitted to n = 2 … 17, the law continues the seed model's branch to n = 60 within 0.1 Hz
+    (its bending term grows as n⁴) and the ring's to n = 44 within 0.05 Hz (next test); the
+    last step's slope (0.45 Hz per order at n = 17, the premise of a straight continuation)
+    is 16.5 Hz off at n = 60 (9.5 Hz off the ring's at n = 44)."""
+    ff = closed_form_hz(np.arange(2, 61), TyreParameters())[:, 0]
+    law = saturating_dispersion(np.arange(2, 18), ff[:16])
+    assert law is not None
+    np.testing.assert_allclose([law(n) for n in range(18, 61)], ff[16:], atol=0.1)
+    assert ff[15] + (ff[15] - ff[14]) * (60 - 17) - ff[58] > 10.0
+
+
+def test_the_law_continues_the_finite_element_ring(ring_same):
+    ns = np.arange(2, 18)
+    law = saturating_dispersion(ns, [ring_same[n] for n in ns])
+    assert law is not None
+    far = [n for n in range(18, 45) if n in ring_same]
+    assert len(far) >= 20
+    np.testing.assert_allclose([law(n) for n in far], [ring_same[n] for n in far], atol=0.05)
+    step = ring_same[17] - ring_same[16]
+    assert ring_same[17] + step * (44 - 17) - ring_same[44] > 5.0
+
+
+def test_a_branch_without_saturation_gets_no_law():
+    """A branch rising at a steady step (no resonance to tend to) is not continued by it."""
+    ns = np.arange(2, 18)
+    assert saturating_dispersion(ns, 60.0 + 20.0 * ns) is None
+    assert saturating_dispersion(ns[:4], [70.0, 90.0, 100.0, 105.0]) is None  # too few orders
+
+
+def test_crowd_biased_top_orders_make_no_false_crowd(ring_same):
+    """34 points, the ring's in-phase branch n = 0 … 17 with ζ = 0.02, its orders 12 … 17
+    as the estimator found them in the matrix's ``ring:noise=0.05`` case: biased up to 1 Hz
+    towards the crowd, the last step 0.1 Hz per order (the truth's 0.45). By the truth n = 11
+    (159.41 Hz) is alone: its alias 34 − 11 = 23 lies at 166.47 Hz, 7.06 Hz away, outside
+    2ζf = 6.38 Hz; the last step's continuation put n = 23 at 165.8 Hz, inside (a false
+    crowd, a right label scored as an alias). With ζ = 0.026 (2ζf = 8.29 Hz) n = 23 is inside
+    by the truth, and n = 11 is a crowd with 23 among its candidates."""
+    th = 2 * np.pi * np.arange(34) / 34
+    biased = [162.14, 163.25, 164.20, 164.78, 165.08, 165.18]  # n = 12 … 17
+    f = [ring_same[n] for n in range(12)] + biased
+    S = np.zeros((18, 2, 34), complex)
+    for n in range(18):
+        S[n, 0] = np.cos(n * th)
+        S[n, 1] = 0.5 * S[n, 0]
+    assert ring_same[23] - ring_same[11] > 2 * 0.02 * ring_same[11]
+    res = classify(f, S, th, ("tread", "sidewall"), damping_ratio=[0.02] * 18)
+    assert [c.n for c in res] == list(range(18))
+    assert not res[11].crowd and not res[11].aliased
+    assert ring_same[23] - ring_same[11] < 2 * 0.026 * ring_same[11]
+    wide = classify(f, S, th, ("tread", "sidewall"), damping_ratio=[0.026] * 18)
+    assert wide[11].crowd and 23 in wide[11].n_candidates
+
+
+def test_the_law_stands_alone_only_where_it_describes_the_branch(ring_same):
+    """The ring's branch (no sidewall term growing with n): its top mode is no outlier
+    above the law, and the continuation is the law, within 0.05 Hz of the truth to n = 44.
+    The seed model with a sidewall membrane (T_s = 5 kN, the matrix's value: the sidewall's
+    stiffness grows as n², the branch keeps rising): the law fitted to n = 2 … 17 lies
+    below the top mode by more than its scatter and 4–9 Hz below the truth at n = 18 … 20;
+    the continuation is the last step's, within 0.3 Hz there."""
+    ns = list(range(18))
+    ring = branch_dispersion(ns, [ring_same[n] for n in ns], "same")
+    far = [n for n in range(18, 45) if n in ring_same]
+    np.testing.assert_allclose([ring(n) for n in far], [ring_same[n] for n in far], atol=0.05)
+    p = TyreParameters()
+    f = branch_frequencies(np.arange(21), p, resolve_effects({"sidewall_membrane": {"T_s": 5.0e3}}))[:, 0]
+    law = saturating_dispersion(np.arange(2, 18), f[2:18])
+    assert law is not None and all(f[n] - law(n) > 4.0 for n in (18, 19, 20))
+    membrane = branch_dispersion(ns, list(f[:18]), "same")
+    np.testing.assert_allclose([membrane(n) for n in (18, 19, 20)], f[18:21], atol=0.3)
