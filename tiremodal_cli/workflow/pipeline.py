@@ -11,7 +11,7 @@ and a folder without one is not.
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -177,22 +177,49 @@ def _model_stages(table, params: TyreParameters, rim_how: str, opt: RunOptions, 
     One base fit per run: the robust fit of the modes that diagnose would make, made here
     and handed to it (identify.json, diagnosis.json, run.json and the report hold it)."""
     say("identify")
+    fits = model_inputs(table, params, rim_how, opt, source)
+    ident, n_pred = _identify_report(fits.base, fits.measured, params, opt)
+    write_text_atomic(outdir / "identify.json", json_text(ident), overwrite=True)
+    say("diagnose")
+    diag = fits.diagnose()
+    rep = report(diag, n_pred)
+    write_text_atomic(outdir / "diagnosis.json", json_text(rep), overwrite=True)
+    write_text_atomic(outdir / "sensitivity.json", json_text(_sensitivity(diag.augmented, n_pred)), overwrite=True)
+    return ident, rep
+
+
+@dataclass(frozen=True)
+class ModelInputs:
+    """What ``run`` diagnoses: the usable modes, the diagnosis options, the test's grid of
+    points and the base fit, as :func:`model_inputs` makes them; :meth:`diagnose` is
+    ``run``'s diagnosis of them."""
+    measured: object
+    params: TyreParameters
+    dopt: DiagnoseOptions
+    n_points: int | None
+    base: object
+
+    def diagnose(self):
+        return diagnose(self.measured, self.params, self.dopt, n_points=self.n_points, base=self.base)
+
+
+def model_inputs(table, params: TyreParameters, rim_how: str, opt: RunOptions, source: dict, *,
+                 rows: list | None = None, search: str = "local") -> ModelInputs:
+    """The usable modes and base fit of ``run``'s modal table (a ModalTable, or the rows of a
+    table of modes), with ``run``'s options, rim (``rim_how``: :func:`rim_condition`'s
+    sentence) and grid of points. ``rows``: the table's rows when they are not ``to_rows(table)``
+    (a table read back from modal.h5 lacks the modal stage's frequency uncertainties; a
+    benchmark passes modes.csv's); ``search``: DiagnoseOptions.search (``run``: "local")."""
     dopt = DiagnoseOptions(seed=opt.seed, noise_floor_pct=opt.noise_floor_pct, max_effects=opt.max_effects,
-                           rim=rim_state(rim_how))
-    rows = table if isinstance(table, list) else to_rows(table)
+                           rim=rim_state(rim_how), search=search)
+    if rows is None:
+        rows = table if isinstance(table, list) else to_rows(table)
     what = "modes.csv" if isinstance(table, list) else "modal.h5"
     measured = usable_modes(rows, dopt, source=what, on_empty=lambda: no_usable_modes(
         f"{source['path']} (its modal table)", rows, modes_from_rows(rows)[1]))
     n_points = None if isinstance(table, list) else grid_points(table.point_angle)  # (a table of modes: no points)
     base = base_fit(measured.modes, params, dopt, n_points)
-    ident, n_pred = _identify_report(base, measured, params, opt)
-    write_text_atomic(outdir / "identify.json", json_text(ident), overwrite=True)
-    say("diagnose")
-    diag = diagnose(measured, params, dopt, n_points=n_points, base=base)
-    rep = report(diag, n_pred)
-    write_text_atomic(outdir / "diagnosis.json", json_text(rep), overwrite=True)
-    write_text_atomic(outdir / "sensitivity.json", json_text(_sensitivity(diag.augmented, n_pred)), overwrite=True)
-    return ident, rep
+    return ModelInputs(measured, params, dopt, n_points, base)
 
 
 def _frf_input(paths, opt: RunOptions, mapping, say):
