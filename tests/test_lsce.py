@@ -109,9 +109,14 @@ def test_tyre_modes_found_once_with_n_and_branch(tyre_tables, noise, f_tol, z_to
 
 
 def test_frequency_uncertainty_carried_from_the_stabilization_equals_the_files(tmp_path, tyre_tables):
-    """σ_f of each mode: carried in memory from its cluster (lsce, run) and rebuilt from the
-    clusters of the modal file (identify, info) are the same numbers, and small against the
-    frequency (a cluster gathers poles within the stabilization's frequency tolerance)."""
+    """σ_f of each mode: carried in memory from its cluster (lsce, run) and stored in the modal
+    file (identify, diagnose, info) are the same numbers — a re-diagnosis of run's modal.h5
+    weights the modes as run did — and small against the frequency (a cluster gathers poles
+    within the stabilization's frequency tolerance). A file without them (written before
+    session 12) has them rebuilt from its clusters, the same numbers here (no split pair whose
+    nearest-frequency match swaps)."""
+    import h5py
+
     from tiremodal_cli.io.modalfile import write_modal
     from tiremodal_cli.modal.table import to_rows
 
@@ -119,11 +124,15 @@ def test_frequency_uncertainty_carried_from_the_stabilization_equals_the_files(t
         assert table.frequency_std_hz is not None
         write_modal(tmp_path / f"{noise}.h5", table)
         back = read_modal(tmp_path / f"{noise}.h5")
-        assert back.frequency_std_hz is None
+        np.testing.assert_array_equal(back.frequency_std_hz, table.frequency_std_hz)
         carried = [r["frequency_uncertainty_hz"] for r in to_rows(table)]
-        rebuilt = [r["frequency_uncertainty_hz"] for r in to_rows(back)]
-        assert carried == rebuilt
+        assert carried == [r["frequency_uncertainty_hz"] for r in to_rows(back)]
         assert all(0 <= u < 0.01 * f for u, f in zip(carried, table.frequency_hz))
+        with h5py.File(tmp_path / f"{noise}.h5", "a") as h:  # as an older file: no dataset
+            del h["frequency_std_hz"]
+        old = read_modal(tmp_path / f"{noise}.h5")
+        assert old.frequency_std_hz is None
+        assert carried == [r["frequency_uncertainty_hz"] for r in to_rows(old)]
 
 
 def test_exponential_window_corrected_through_lsce():

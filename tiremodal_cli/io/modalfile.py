@@ -8,6 +8,10 @@ datasets per mode ``frequency_hz``, ``damping_ratio``, ``pole`` (complex, as est
 rad/s), ``mpc``, ``significance``, ``group``, ``n`` (−1: none), ``n_spatial``,
 ``n_confidence``, ``branch`` (str, "" none), ``branch_confidence``, ``pair`` (−1: none),
 ``splitting_hz`` (NaN: none), ``in_order`` (bool: within its branch's dispersion order),
+``frequency_std_hz`` (Hz: the mode's frequency scatter over the model orders, as the modal
+stage carried it to identify and diagnose; NaN: none; absent in files written before
+session 12, where :func:`tiremodal_cli.modal.table.frequency_uncertainty` rebuilds it from
+the clusters),
 ``shapes`` (n_modes, n_channels, n_points) complex residues;
 geometry ``point_angle``, ``point_index``, ``channel_name``, ``channel_location``,
 ``channel_angle``; ``fit_error`` (n_channels, n_points); ``channel_live`` (n_channels,
@@ -103,6 +107,10 @@ def write_modal(path, t: ModalTable, *, input_file: str = "", input_sha256: str 
                 h[name].attrs["null_reason"] = DEAD_REASON
             for name in ("branch", "channel_name", "channel_location"):
                 h.create_dataset(name, data=list(getattr(t, name)), dtype=s)
+            if t.frequency_std_hz is not None:  # the stage's own numbers: a rebuild can swap a split pair's
+                h.create_dataset("frequency_std_hz", data=np.asarray(t.frequency_std_hz, float))
+                h["frequency_std_hz"].attrs["null_value"] = "NaN"
+                h["frequency_std_hz"].attrs["null_reason"] = "no adopted cluster of the mode's group to take it from"
 
 
 #: why a channel has no shape, fit error or synthesis (written beside those datasets)
@@ -155,7 +163,7 @@ def read_modal(path) -> ModalTable:
                                        "shapes", "point_angle", "point_index", "channel_angle", "fit_error",
                                        "diagram")}
             strs = {k: read_strings(h[k]) for k in ("branch", "channel_name", "channel_location")}
-            d.update({k: h[k][()] for k in ("synthesis", "synthesis_freq_hz") if k in h})
+            d.update({k: h[k][()] for k in ("synthesis", "synthesis_freq_hz", "frequency_std_hz") if k in h})
             live = h["channel_live"][()].astype(bool) if "channel_live" in h else None
             a = dict(h.attrs)
         except KeyError as exc:
@@ -163,6 +171,9 @@ def read_modal(path) -> ModalTable:
         except (OSError, ValueError) as exc:
             raise DataFormatError(f"{where}: cannot read ({exc}); the file may be truncated") from None
 
+    if "frequency_std_hz" in d and np.shape(d["frequency_std_hz"]) != np.shape(d["frequency_hz"]):
+        raise DataFormatError(f"{where}: frequency_std_hz has {np.size(d['frequency_std_hz'])} entries for "
+                              f"{np.size(d['frequency_hz'])} modes")
     if live is not None:
         if live.shape != (len(strs["channel_name"]),):
             raise DataFormatError(f"{where}: channel_live has {live.size} entries for {len(strs['channel_name'])} channels")

@@ -54,8 +54,9 @@ class ModalTable:
     rejected: list | None = None
     synthesis: np.ndarray | None = None
     synthesis_freq_hz: np.ndarray | None = None
-    #: each mode's frequency uncertainty (Hz) carried from the stabilization; None when read
-    #: from a modal file (which does not store it: :func:`frequency_uncertainty` rebuilds it)
+    #: each mode's frequency uncertainty (Hz) carried from the stabilization (and stored in the
+    #: modal file since session 12); None when read from an older file (:func:`frequency_uncertainty`
+    #: rebuilds it there, and can swap a split pair's two values)
     frequency_std_hz: np.ndarray | None = None
 
     @property
@@ -119,8 +120,9 @@ def to_rows(t: ModalTable) -> list[dict]:
         what ``identify``, ``diagnose`` and :func:`tiremodal_cli.tyre.measured.modes_from_rows` read.
     """
     rows = []
-    # carried from the stabilization when the table comes from the modal stage; rebuilt from
-    # the clusters when it was read from a file (the same numbers: checked over the suite)
+    # carried from the stabilization (and the modal file); rebuilt from the clusters only for a
+    # file written before session 12 — where nearest-frequency matching can swap a split pair's
+    # values (4 of 55 validation cases), so a re-diagnosis of such a file may differ from run's
     unc = frequency_uncertainty(t) if t.frequency_std_hz is None else np.asarray(t.frequency_std_hz, float)
     crowds = (t.meta or {}).get("crowds") or []
     n_top = t.point_angle.size // 2
