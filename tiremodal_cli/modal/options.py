@@ -38,6 +38,11 @@ class ModalOptions:
               orders, the group's rows are no complete model and refining there moved
               right modes off), and the weak poles (kept by the own-peak rule) with
               their group's dropped poles held in the basis (session 12)
+    guard : sweep an order group again with a guard band after the band's top when two of
+              its stable poles lie within 6 half-widths of each other across the band's
+              wrap (:mod:`.guard`). Off: measured on the matrix (docs/lsce.md, "Guard band
+              across the wrap"), it mends the ring's 24.45 Hz rim mode at 5,120 Hz but
+              moves right modes in crowded groups elsewhere
     """
 
     band_hz: tuple[float, float] | None = None
@@ -53,6 +58,7 @@ class ModalOptions:
     workers: int = 1
     order_within_band: bool = False
     refine: bool = True
+    guard: bool = False
 
     def check(self):
         if self.spatial not in ("auto", "on", "off"):
