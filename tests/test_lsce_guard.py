@@ -64,8 +64,8 @@ def test_guarded_band_keeps_its_lines_and_widens_its_period():
 def ring_rim_5120(tmp_path_factory):
     """The validation matrix's 5,120 Hz ring with a free rim, 40 points, bounced and
     overloaded hits (seeded), through ``run``; then its modal stage again on the run's FRFs
-    over the run's band with the guard (:class:`ModalOptions` ``guard``). Returns the
-    generator's truth modes and the frequencies (Hz) of the two tables: without, with."""
+    over the run's band, without the guard (``ModalOptions(guard=False)``) and as by default.
+    Returns the generator's truth modes and the frequencies (Hz) of the two tables: without, default."""
     import json
 
     import h5py
@@ -82,15 +82,17 @@ def ring_rim_5120(tmp_path_factory):
     with h5py.File(folder / "run" / "modal.h5") as f:
         band = tuple(json.loads(f.attrs["meta"])["band_hz"])
     r = read_frf(folder / "run" / "frf.h5")
-    tables = [modal_table_from_frf(r, ModalOptions(band_hz=band, guard=g))[0] for g in (False, True)]
+    assert ModalOptions().guard  # the default path
+    tables = [modal_table_from_frf(r, ModalOptions(band_hz=band, guard=False))[0],
+              modal_table_from_frf(r, ModalOptions(band_hz=band))[0]]
     freqs = [np.asarray(t.frequency_hz, float) for t in tables]
     return simulate(config_for(case)).truth["modes"], freqs
 
 
-def test_the_rim_mode_at_the_foot_is_found_within_the_ruler_with_the_guard(ring_rim_5120):
+def test_the_rim_mode_at_the_foot_is_found_within_the_ruler_by_default(ring_rim_5120):
     """The generator's n = 1 rim mode (24.45 Hz, 19 Hz above the band's foot, its group's
     1,211 Hz pole 4.2 of that pole's half-widths away across the wrap) is in the table
-    within 0.3 % with the guard; without it LSCE's nearest row is more than 0.3 % off
+    within 0.3 % by default (its pole re-estimated in the guarded sweep); without the guard LSCE's nearest row is more than 0.3 % off
     (main at d9abc36: 24.30 Hz, −0.59 %)."""
     truth, (plain, guarded) = ring_rim_5120
     rim = {round(m["frequency_hz"], 6) for m in truth if m["branch"] == "rim" and m["n"] == 1}
@@ -98,3 +100,27 @@ def test_the_rim_mode_at_the_foot_is_found_within_the_ruler_with_the_guard(ring_
     assert 24.0 < f_true < 25.0
     assert np.min(np.abs(guarded / f_true - 1)) <= 0.003
     assert np.min(np.abs(plain / f_true - 1)) > 0.003
+
+
+def test_no_truth_mode_found_without_the_guard_is_lost_by_default(ring_rim_5120):
+    """Only the wrap-biased pole is re-estimated: every generator truth mode in the band that
+    the unguarded table finds within 0.3 % the default table finds within 0.3 % too, and the
+    default table has no more rows (the guard adds no mode)."""
+    truth, (plain, guarded) = ring_rim_5120
+    f_true = np.array(sorted({round(m["frequency_hz"], 6) for m in truth}))
+    hit = lambda table: np.array([np.min(np.abs(table / f - 1)) <= 0.003 for f in f_true])  # noqa: E731
+    assert np.all(hit(guarded)[hit(plain)])
+    assert hit(guarded).sum() > hit(plain).sum()
+    assert guarded.size <= plain.size
+
+
+def test_the_wrap_biases_the_pole_within_the_other_poles_image_flank():
+    """24.45 Hz (ζ 0.03, half-width 0.73 Hz) and 1,211 Hz (ζ 0.02, half-width 24.22 Hz) in
+    5.5–1,295.5 Hz: 103.5 Hz apart across the wrap, under 6 × 24.22 = 145.3 Hz (the wide
+    pole's image reaches the narrow one) but far over 6 × 0.73 Hz: only the 24.45 Hz pole is
+    biased. A pole in the middle (650 Hz) is never named; poles 300 Hz from the edges neither."""
+    from tiremodal_cli.modal.guard import wrap_biased
+    got = wrap_biased([24.45, 650.0, 1211.0], [0.03, 0.02, 0.02], 5.5, 1295.5)
+    np.testing.assert_array_equal(got, [True, False, False])
+    np.testing.assert_array_equal(wrap_biased([305.5, 995.5], [0.02, 0.02], 5.5, 1295.5), [False, False])
+    np.testing.assert_array_equal(wrap_biased([24.45], [0.03], 5.5, 1295.5), [False])

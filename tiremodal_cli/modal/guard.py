@@ -26,23 +26,29 @@ sweep — when every pair already is that far apart. A guard costs model order (
 poles also model the bridge): a guard of one whole band (K lines) lost four of the ring
 Timoshenko + rim combination's same-direction n = 7 … 10 modes, and a guard of 6
 half-widths of the group's widest pole in every group moved right modes in crowded groups
-(docs/lsce.md, "Guard band across the wrap"), hence the least guard, only where needed.
+(docs/lsce.md, "Guard band across the wrap"), hence the least guard, only where needed —
+and the guarded sweep only re-estimates the poles the wrap biases (:func:`wrap_biased`),
+each replacing its first-sweep pole when the group's rows fit it better; every other pole
+stays the first sweep's (a whole group swept with the guard moved right poles in crowds).
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses
-from tiremodal_cli.modal.refine import EDGE_HALF_WIDTHS
-from tiremodal_cli.modal.stabilization import stabilize
+from tiremodal_cli.modal.lsfd import lsfd
+from tiremodal_cli.modal.refine import EDGE_HALF_WIDTHS, MAX_SHIFT_HALF_WIDTHS, WINDOW_HALF_WIDTHS
+from tiremodal_cli.modal.stabilization import Cluster, stabilize
 
-__all__ = ["guard_lines", "guarded_diagram"]
+__all__ = ["guard_lines", "guarded_diagram", "wrap_biased"]
 
 
 def guarded_diagram(data, poles_of):
-    """An order group's stabilization diagram, swept again with a guard after the band's
-    top when its stable poles lie too near each other across the band's wrap.
+    """An order group's stabilization diagram; with ``data.opt.guard`` (the default) the
+    poles the band's wrap biases re-estimated in a second sweep with a guard after the top.
 
     Parameters
     ----------
@@ -51,24 +57,89 @@ def guarded_diagram(data, poles_of):
 
     Returns
     -------
-    :class:`~tiremodal_cli.modal.stabilization.Diagram`; the first sweep's without
-    ``data.opt.guard`` (the default: docs/lsce.md, "Guard band across the wrap"), when no guard is
-    needed (:func:`guard_lines` = 0) or the method is not LSCE (pLSCF fits the lines
-    themselves: no impulse responses, no wrap).
+    :class:`~tiremodal_cli.modal.stabilization.Diagram`: the first sweep's, in which only the
+    clusters of the poles :func:`wrap_biased` names are replaced by the guarded sweep's
+    (:func:`_re_estimated`); the first sweep's unchanged without ``data.opt.guard``, when no
+    guard is needed (:func:`guard_lines` = 0) or the method is not LSCE (pLSCF fits the
+    lines themselves: no impulse responses, no wrap).
     """
     opt = data.opt
     b = principal_responses(data.freq, data.rows, None, rtol=opt.rtol_svd)
     d = stabilize(b, poles_of(b), opt.stabilization)
     if not opt.guard or opt.method != "lsce" or not d.selected():
         return d
-    fn, zeta = poles_to_modal(np.array([c.representative.s for c in d.selected()], dtype=complex))
+    sel = d.selected()
+    fn, zeta = poles_to_modal(np.array([c.representative.s for c in sel], dtype=complex))
     df = (data.freq[-1] - data.freq[0]) / (data.freq.size - 1)
-    inside = (fn - zeta * fn >= data.freq[0]) & (fn + zeta * fn <= data.freq[-1])  # as merge.off_edges
-    g = guard_lines(fn[inside], zeta[inside], data.freq[0], data.freq[-1] + df, df)
+    inside = np.flatnonzero((fn - zeta * fn >= data.freq[0]) & (fn + zeta * fn <= data.freq[-1]))  # merge.off_edges
+    args = (fn[inside], zeta[inside], data.freq[0], data.freq[-1] + df)
+    g = guard_lines(*args, df)
     if g == 0:
         return d
     b = principal_responses(data.freq, data.rows, None, rtol=opt.rtol_svd, guard=g)
-    return stabilize(b, poles_of(b), opt.stabilization)
+    dg = stabilize(b, poles_of(b), opt.stabilization)
+    return _re_estimated(data, d, dg, [sel[i] for i in inside[wrap_biased(*args)]])
+
+
+def _re_estimated(data, d, dg, named):
+    """``d`` with each named cluster replaced by the guarded sweep's stable cluster nearest
+    it — within :data:`~tiremodal_cli.modal.refine.MAX_SHIFT_HALF_WIDTHS` of its half-power
+    half-width (as a refined pole's move) — when the group's rows fit better with the new
+    pole: the residual of the group's LSFD fit (every selected pole, free residues, residual
+    terms) over the pole's window of ``WINDOW_HALF_WIDTHS`` half-widths (as refine.py's
+    check in the physical FRFs). Every other cluster stays the first sweep's. The new cluster
+    holds both sweeps' poles (representative: the guarded one's), so its frequency scatter —
+    the pole's uncertainty downstream (identify weighs by it) — holds the wrap's move: the
+    guard is the least that reaches 6 half-widths, and a bias of the move's order may remain
+    (measured: the 24.45 Hz rim mode 24.30 → 24.49 Hz, the guarded cluster's own scatter
+    0.005 Hz, which set the mode aside in the diagnosis as 7 σ off)."""
+    clusters = list(d.clusters)
+    cand = dg.selected()
+    for c in named:
+        s = np.array([k.representative.s for k in d.selected()], dtype=complex)
+        i = int(np.flatnonzero(s == c.representative.s)[0])
+        f0, z0 = c.representative.freq_hz, c.representative.damping_ratio
+        near = [k for k in cand if abs(k.representative.freq_hz - f0) <= MAX_SHIFT_HALF_WIDTHS * z0 * f0]
+        if not near:
+            continue
+        new = min(near, key=lambda k: abs(k.representative.freq_hz - f0))
+        s_new = s.copy()
+        s_new[i] = new.representative.s
+        w = np.abs(data.freq - f0) <= WINDOW_HALF_WIDTHS * z0 * f0
+        if _window_residual(data, s_new, w) < _window_residual(data, s, w):  # both sweeps' poles: its scatter holds the move
+            clusters[clusters.index(c)] = Cluster(c.members + new.members, c.orders | new.orders, True, new.reason,
+                                                  new.representative)
+            d = replace(d, clusters=clusters)
+    return d
+
+
+def _window_residual(data, s, window) -> float:
+    """‖rows − LSFD synthesis‖² of the group's rows (n_rows, K) with poles ``s`` over the lines ``window``."""
+    r = (data.rows - lsfd(data.freq, data.rows, s, form=data.form).synthesis)[:, window]
+    return float(np.sum(r.real**2 + r.imag**2))
+
+
+def wrap_biased(freq_hz, damping_ratio, f_lo: float, f_hi: float) -> np.ndarray:
+    """Which poles lie within ``EDGE_HALF_WIDTHS`` half-widths of another pole's image across the wrap.
+
+    Parameters
+    ----------
+    freq_hz, damping_ratio : (n,) arrays     the group's stable poles (Hz; ratio)
+    f_lo, f_hi : float, Hz                   the band's first line and its top (first line + K df)
+
+    Returns
+    -------
+    (n,) bool: pole a is biased when, for some pole b on the other side of the band, the
+    distance across the wrap (f_a − f_lo) + (f_hi − f_b) (a below b; mirrored) is under
+    EDGE_HALF_WIDTHS × ζ_b f_b — b's image's flank, in b's half-widths (the distance from
+    an edge within which LSCE's error is at least twice the interior's: refine.py).
+    """
+    f = np.asarray(freq_hz, float)
+    hw = np.asarray(damping_ratio, float) * f
+    wrap = (f - f_lo)[:, None] + (f_hi - f)[None, :]  # a (row) below b (column)
+    wrap = np.where(f[:, None] < f[None, :], wrap, wrap.T)  # symmetric: the pair's distance
+    close = (wrap < EDGE_HALF_WIDTHS * hw[None, :]) & (f[:, None] != f[None, :])
+    return close.any(axis=1)
 
 
 def guard_lines(freq_hz, damping_ratio, f_lo: float, f_hi: float, line_hz: float) -> int:
