@@ -38,7 +38,7 @@ import scipy.linalg
 
 from tiremodal_cli.errors import DataFormatError, ParameterError
 
-__all__ = ["Band", "band_lines", "principal_responses", "normal_matrix", "sweep", "sweep_poly", "OrderPoles",
+__all__ = ["Band", "band_lines", "bridge", "principal_responses", "normal_matrix", "sweep", "sweep_poly", "OrderPoles",
            "poles_to_modal"]
 
 
@@ -50,7 +50,8 @@ class Band:
     ----------
     freq_hz : (K,) ndarray        the band's lines
     f_lo : float, Hz              first line
-    width_hz : float              K × df, the zoomed band's span
+    width_hz : float              (K + G) × df, the impulse responses' period: the zoomed
+                                  band's span and its guard's G lines (none: G = 0)
     dt : float, s                 1 / width_hz
     U : (n_frf, r) ndarray        principal directions (orthonormal)
     prf : (r, K) complex ndarray  the principal response functions (H ≈ U @ prf)
@@ -86,7 +87,8 @@ def band_lines(freq_hz, band_hz) -> np.ndarray:
     return sel
 
 
-def principal_responses(freq_hz, H, band_hz=None, *, rtol: float = 1e-4, max_components: int | None = None) -> Band:
+def principal_responses(freq_hz, H, band_hz=None, *, rtol: float = 1e-4, max_components: int | None = None,
+                        guard: int = 0) -> Band:
     """Reduce the band's FRFs to principal response functions and their impulse responses.
 
     Parameters
@@ -98,10 +100,12 @@ def principal_responses(freq_hz, H, band_hz=None, *, rtol: float = 1e-4, max_com
                                             (with ≥ 8 of them) above 3 × the median of
                                             the lower half: the noise plateau
     max_components : int, optional
+    guard : int                             guard lines after the band's top in the impulse
+                                            responses (:func:`bridge`; :mod:`.guard`)
 
     Returns
     -------
-    Band
+    Band (``width_hz`` and ``dt`` those of the K + guard lines: the impulse responses' period)
     """
     H = np.asarray(H)
     if H.ndim != 2:
@@ -125,9 +129,31 @@ def principal_responses(freq_hz, H, band_hz=None, *, rtol: float = 1e-4, max_com
     if max_components is not None:
         r = min(r, max_components)
     P = s[:r, None] * Vh[:r]
-    irf = np.fft.ifft(P, axis=-1)
-    return Band(freq_hz=f, f_lo=float(f[0]), width_hz=K * df, dt=1.0 / (K * df), U=U[:, :r], prf=P, irf=irf,
+    irf = np.fft.ifft(bridge(P, guard), axis=-1)
+    width = (K + max(guard, 0)) * df
+    return Band(freq_hz=f, f_lo=float(f[0]), width_hz=width, dt=1.0 / width, U=U[:, :r], prf=P, irf=irf,
                 singular_values=s)
+
+
+def bridge(P, n_guard: int) -> np.ndarray:
+    """The band's lines followed by ``n_guard`` guard lines bridging the top to the foot.
+
+    Parameters
+    ----------
+    P : (..., K) complex ndarray     the band's lines (any leading shape: FRFs, PRFs)
+    n_guard : int                    guard lines G ≥ 0
+
+    Returns
+    -------
+    (..., K + G) complex ndarray: P, then the values on the straight line from P[..., -1]
+    to P[..., 0] at the G points strictly between them (periodic data continuous).
+    """
+    P = np.asarray(P)
+    if n_guard <= 0:
+        return P
+    t = np.arange(1, n_guard + 1) / (n_guard + 1.0)
+    fill = P[..., -1:] * (1.0 - t) + P[..., :1] * t
+    return np.concatenate([P, fill], axis=-1)
 
 
 def normal_matrix(irf, p_max: int, *, skip: int = 0, stop: int | None = None) -> np.ndarray:

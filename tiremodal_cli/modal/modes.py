@@ -25,7 +25,8 @@ from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
 from tiremodal_cli.modal.joint import add_missing_orders
 from tiremodal_cli.modal.refine import dropped_poles, refine_adopted
 from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
-from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses, sweep, sweep_poly
+from tiremodal_cli.modal.guard import guarded_diagram
+from tiremodal_cli.modal.lsce import bridge, poles_to_modal, principal_responses, sweep, sweep_poly
 from tiremodal_cli.modal.lsfd import mpc
 from tiremodal_cli.modal.merge import GroupMode, leak_copies, merge_groups, off_edges, swap_cost, under_residual
 from tiremodal_cli.modal.options import ModalOptions
@@ -270,7 +271,8 @@ def _group_poles(data: GroupData, b, spatial: bool, group_max: int) -> list:
             poles = [dataclasses.replace(op, participation=None) for op in poles]
         return poles
     if poly:  # split pairs resolve
-        irf = np.fft.ifft(rows.reshape(n_h, data.n_c, -1).transpose(1, 0, 2), axis=-1)
+        guard = b.irf.shape[-1] - b.freq_hz.size
+        irf = np.fft.ifft(bridge(rows.reshape(n_h, data.n_c, -1).transpose(1, 0, 2), guard), axis=-1)
         return sweep_poly(irf, range(1, opt.poly_order + 1), b.dt, b.f_lo, b.width_hz, workers=opt.workers)
     return sweep(b, range(2, group_max + 1), skip=opt.skip)
 
@@ -281,8 +283,7 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
     what :func:`_refine_adopted` needs: (data, kept poles, their participation, the fit's
     synthesis in the group's rows, the poles the fit dropped and their participation —
     :func:`~tiremodal_cli.modal.refine.dropped_poles`)."""
-    b = principal_responses(data.freq, data.rows, None, rtol=data.opt.rtol_svd)
-    d = stabilize(b, _group_poles(data, b, spatial, group_max), data.opt.stabilization)
+    d = guarded_diagram(data, lambda b: _group_poles(data, b, spatial, group_max))
     s = np.array([c.representative.s for c in d.selected()], dtype=complex)
     s0 = s.copy()
     parts = [c.representative.participation for c in d.selected()]

@@ -38,6 +38,10 @@ class ModalOptions:
               orders, the group's rows are no complete model and refining there moved
               right modes off), and the weak poles (kept by the own-peak rule) with
               their group's dropped poles held in the basis (session 12)
+    guard : re-estimate the poles the band's wrap biases (within 6 half-widths of another
+              pole's image across the wrap) in a second sweep with a guard band after the
+              band's top, each kept where the group's rows fit better (:mod:`.guard`); every
+              other pole stays the first sweep's. Docs/lsce.md, "Guard band across the wrap"
     """
 
     band_hz: tuple[float, float] | None = None
@@ -53,6 +57,7 @@ class ModalOptions:
     workers: int = 1
     order_within_band: bool = False
     refine: bool = True
+    guard: bool = True
 
     def check(self):
         if self.spatial not in ("auto", "on", "off"):

@@ -131,7 +131,8 @@ def _shapes(band: Band, s, max_lines: int = 128):
 
 
 def _candidates(op: OrderPoles, band: Band, zeta_max: float):
-    f_hi = band.f_lo + band.width_hz
+    k = band.freq_hz.size  # the band's top: its K lines' span (width_hz also holds a guard's lines)
+    f_hi = band.f_lo + k * ((band.freq_hz[-1] - band.freq_hz[0]) / max(k - 1, 1))
     keep = (op.freq_hz >= band.f_lo) & (op.freq_hz <= f_hi) & (op.damping_ratio > 0) & \
         (op.damping_ratio < zeta_max) & (np.abs(op.z) < 1)
     return np.flatnonzero(keep)
