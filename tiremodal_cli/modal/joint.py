@@ -16,14 +16,17 @@ interpolated, and beyond its highest order continued with the last step's slope 
 test has it) for as many orders as that step spans. Every order the branch does not hold is
 proposed at f(n) with its neighbours' damping, in its aliased order group (unless a mode of that
 group already lies within its half-power band: that mode is the order's); a proposal in a crowd
-(another order of its group within its bandwidth) only holds its response in the fit. Each
+(another order of its group within its bandwidth) only holds its response in the fit, its pole
+held while the found modes of its branch about it are refined (the neighbours its response
+biased). Each
 proposal is refined (:func:`_local`) with the found modes of its branch within
 :data:`NEAR_HALF_WIDTHS` of its half-width by variable projection (``scipy.optimize.least_squares``,
 the residues eliminated linearly: :func:`_fit`) over the lines within
 :data:`~tiremodal_cli.modal.refine.WINDOW_HALF_WIDTHS` half-widths of it, every other pole reaching
 those lines held with its residues — bounded sets, whatever the chain of overlapping bands — in
 :data:`PASSES` Gauss–Seidel passes. A proposal stays only when it ends inside its box, apart from
-the other poles and with its branch's frequencies rising with n, and when removing it raises its
+the other poles and with its branch's frequencies rising with n (of a falling pair, the
+proposal that moved most goes), and when removing it raises its
 window's residual by more than a fit of its unknowns to the noise would (:func:`threshold`:
 χ²(2p + 2)/2 at the stage's false-alarm level ``NOISE_ALPHA``/K), weakest first; the rest are
 refined again without the dropped ones (:data:`ROUNDS`). Measured rates and effect: docs/lsce.md
@@ -224,21 +227,22 @@ class _Problem:
         return self.freq[w], np.concatenate([self.Yw[:, :, w].real, self.Yw[:, :, w].imag], axis=2)
 
 
-def _rising(prob: _Problem, poles, idx, props) -> bool:
-    """Whether the branch's frequencies still rise with n across the set's proposals and the
-    found modes of their branch (refined: ``poles`` at ``idx``)."""
+def _falling(prob: _Problem, poles, idx, props) -> set:
+    """The proposals (their indices in ``props``) in a pair of orders of one branch whose
+    frequencies do not rise with n — the pair a proposal and a found mode of its branch, or two
+    proposals (refined: the found modes' poles ``poles`` at ``idx``, then the proposals')."""
     f = poles_to_modal(poles)[0]
     found = dict(zip(idx, f[:len(idx)]))
+    bad = set()
     for br in {p.branch for p in props}:
-        pts = [(n, found.get(i, poles_to_modal(prob.poles[i])[0])) for i, (n, b) in enumerate(prob.reads)
+        pts = [(n, found.get(i, poles_to_modal(prob.poles[i])[0]), None) for i, (n, b) in enumerate(prob.reads)
                if b == br]
-        pts += [(p.n, fp) for p, fp in zip(props, f[len(idx):]) if p.branch == br]
-        pts.sort()
-        mine = {p.n for p in props if p.branch == br}
-        for (n1, f1), (n2, f2) in zip(pts[:-1], pts[1:]):
-            if (n1 in mine or n2 in mine) and n2 > n1 and f2 <= f1:
-                return False
-    return True
+        pts += [(p.n, fp, k) for k, (p, fp) in enumerate(zip(props, f[len(idx):])) if p.branch == br]
+        pts.sort(key=lambda t: (t[0], t[1]))
+        for (n1, f1, k1), (n2, f2, k2) in zip(pts[:-1], pts[1:]):
+            if (k1 is not None or k2 is not None) and n2 > n1 and f2 <= f1:
+                bad |= {k for k in (k1, k2) if k is not None}
+    return bad
 
 
 def _around(prob: _Problem, s, alive, j):
@@ -250,19 +254,24 @@ def _around(prob: _Problem, s, alive, j):
     return (*prob.window(lo, hi), np.flatnonzero(near))
 
 
-def _local(prob: _Problem, s, s_orig, cols, alive, j):
+def _local(prob: _Problem, s, s_orig, cols, alive, j, held=False):
     """Proposal ``j`` refined with the found modes of its branch within :data:`NEAR_HALF_WIDTHS`
     of its half-power half-width, every other pole reaching its window held with its residues:
-    (poles, j's offset as a share of its box, j's σ in rad/s)."""
+    (poles, j's offset as a share of its box, j's σ in rad/s). ``held`` (a crowd): j's pole
+    stays where the dispersion puts it and only those found modes move (offset and σ 0)."""
     freq, Yr, idx = _around(prob, s, alive, j)
     f, z = poles_to_modal(s[idx])
     fj = poles_to_modal(s[j])
     branch = [prob.reads[i][1] if i < len(prob.reads) else None for i in idx]  # found modes: their reading
     free = np.flatnonzero((np.abs(f - fj[0]) < NEAR_HALF_WIDTHS * fj[1] * fj[0])
-                          & ((idx == j) | (np.array(branch) == prob.branch_of[j])))
+                          & (((idx == j) & (not held)) | (np.array(branch) == prob.branch_of[j])))
+    if free.size == 0:
+        return s, 0.0, 0.0
     new, off, sd = _refine(freq, Yr, prob.D, [cols[i] for i in idx], s[idx], s_orig[idx], free, prob.q)
     s = s.copy()
     s[idx] = new
+    if held:
+        return s, 0.0, 0.0
     k = int(np.flatnonzero(idx[free] == j)[0])
     return s, off[k], sd[k]
 
@@ -288,12 +297,14 @@ def _joint(prob: _Problem, props) -> tuple:
     alive = np.ones(s_orig.size, dtype=bool)
     why, sigma = {}, np.zeros(s_orig.size)
     mine = nf + np.argsort(poles_to_modal(s_orig[nf:])[0])
-    free = np.array([not props[j - nf].crowd for j in mine], dtype=bool)  # a crowd's pole is held
     for _ in range(ROUNDS):
         s, off = s_orig.copy(), {}
         for _ in range(PASSES):
-            for j in mine[alive[mine] & free]:
-                s, off[j], sigma[j] = _local(prob, s, s_orig, cols, alive, j)
+            for j in mine[alive[mine]]:  # a crowd's pole is held; the found modes about it move
+                if props[j - nf].crowd:
+                    s = _local(prob, s, s_orig, cols, alive, j, held=True)[0]
+                else:
+                    s, off[j], sigma[j] = _local(prob, s, s_orig, cols, alive, j)
         out = [j for j in off if alive[j] and abs(off[j]) >= 0.98]
         for j in out:
             why[j] = "ends on its box's edge (the fit's minimum lies on another mode)"
@@ -303,9 +314,10 @@ def _joint(prob: _Problem, props) -> tuple:
             out.append(j)
             why[j] = "ends within a line of another pole (one pole twice)"
         live = [j for j in mine if alive[j] and j not in out]
-        if not out and not _rising(prob, np.concatenate([s[:nf], s[live]]), np.arange(nf),
-                                   [props[j - nf] for j in live]):
-            out = [max(live, key=lambda j: abs(s[j] - s_orig[j]))]
+        bad = [] if out else _falling(prob, np.concatenate([s[:nf], s[live]]), np.arange(nf),
+                                      [props[j - nf] for j in live])
+        if bad:  # the proposal of a falling pair that moved most
+            out = [max((live[k] for k in bad), key=lambda j: abs(s[j] - s_orig[j]))]
             why[out[0]] = "its branch's frequencies rise with n only without it"
         alive[out] = False
         ratio = {j: _gain(prob, s, cols, alive, j, n_c) for j in mine if alive[j]}
