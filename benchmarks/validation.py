@@ -264,8 +264,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1289 / 1334 (97 %) | 11 / 1627 (0.7 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-24, end of session 11 | a crowd candidate judged at its own pole when the estimator found it, and no misread alias in a branch's dispersion; with failed points a mode tested against the noise and leak copies within both half-power half-widths; pole refinement on near the band's edges (#14) | paper | 1155 / 1212 (95 %) | 22 / 1436 (1.5 %) | 0 | 14 / 14 | 13 / 13 | 2.4 min |
 | | | ring | 1295 / 1334 (97 %) | 9 / 1626 (0.6 %) | 0 | 14 / 14 | 14 / 14 | |
-| 2026-11-24, end of session 12 | the crowd test's same-direction branch continued by the model's saturating law; weak poles refined with their group's dropped poles in the basis; with failed points, the unfound orders proposed from the dispersion and refined jointly in the physical FRFs with residues held to their orders (#14) | paper | 1169 / 1212 (96 %) | 19 / 1448 (1.3 %) | 0 | 14 / 14 | 13 / 13 | 2.9 min |
-| | | ring | 1297 / 1334 (97 %) | 9 / 1626 (0.6 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-24, end of session 12 | the crowd test's same-direction branch continued by the model's saturating law; weak poles refined with their group's dropped poles in the basis; a pole biased by the band's wrap re-estimated with a guard band; with failed points, the unfound orders proposed from the dispersion and refined jointly in the physical FRFs with residues held to their orders (#14) | paper | 1170 / 1212 (97 %) | 18 / 1448 (1.2 %) | 0 | 14 / 14 | 13 / 13 | 2.9 min |
+| | | ring | 1298 / 1334 (97 %) | 8 / 1626 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
