@@ -152,8 +152,9 @@ def test_crowd_when_an_alias_order_falls_in_the_half_power_band():
 
 def test_an_alias_out_of_order_does_not_flatten_the_dispersion():
     """12 points; the anti-phase branch n = 0 … 6 at 100 … 235 Hz (ζ = 0.02), and one more
-    order-1 pattern at 130 Hz (an air-cavity mode: n = 1 is held at 110 Hz, so it is given
-    the alias 11, out of the branch's order). The branch's dispersion is the measured
+    order-1 pattern at 130 Hz (an air-cavity mode: n = 1 is held at 110 Hz; its alias 11
+    would make the branch fall below n = 3 at 145 Hz, so it keeps n = 1, out of the branch's
+    order). The branch's dispersion is the measured
     orders': continued from n = 5 → 6 (35 Hz per order), the top mode's alias 12 + 6 = 18
     lies ~420 Hz above it, far outside 2ζf = 9.4 Hz — no crowd. Taking the 130 Hz mode's
     inferred order 11 as a point of the curve flattened it at 235 Hz from n = 6 to 11 (a
@@ -164,8 +165,10 @@ def test_an_alias_out_of_order_does_not_flatten_the_dispersion():
     modes = [(n, -0.5) for n in range(7)] + [(1, -0.5)]
     f = [100.0, 110.0, 125.0, 145.0, 170.0, 200.0, 235.0, 130.0]
     res = classify(f, _shapes(th, modes), th, LOCS, damping_ratio=[0.02] * 8)
-    assert [c.n for c in res] == [0, 1, 2, 3, 4, 5, 6, 11]
-    assert res[7].aliased and not res[7].in_order
+    # (session 13) its alias 11 would make the branch fall (n = 3 is clear at 145 Hz, above
+    # it): it keeps its spatial order 1, out of the branch's order
+    assert [c.n for c in res] == [0, 1, 2, 3, 4, 5, 6, 1]
+    assert not res[7].aliased and [c.in_order for c in res].count(False) == 1  # one of a falling pair
     assert not any(c.crowd for c in res)
     alone = classify(f[:7], _shapes(th, modes[:7]), th, LOCS, damping_ratio=[0.02] * 7)
     assert not res[6].aliased and res[6].n_confidence == pytest.approx(alone[6].n_confidence, abs=1e-12)
@@ -224,3 +227,22 @@ def test_an_unreadable_mode_out_of_order_is_read_on_the_other_branch():
     assert odd.branch_confidence < 0.5 and odd.n_spatial == 5
     assert (odd.n, odd.branch, odd.aliased, odd.in_order) == (7, "same", True, True)
     assert [c.n for c in res[:7]] == [1, 2, 3, 4, 5, 6, 8] and [c.n for c in res[8:]] == [0, 1, 2, 3, 4]
+
+
+def test_a_clear_mode_off_the_branch_keeps_its_order_when_its_alias_would_make_the_branch_fall():
+    """12 points; the in-phase branch n = 1 … 6 at 40 … 110 Hz, and one more clear order-4
+    pattern at 92 Hz, 8 % above the branch's n = 4 (a family the branch does not hold: the
+    ring's sidewall-shear modes of n = 1–5 at 93–98 Hz). "Each order once per branch" read it
+    as the alias 12 − 4 = 8, yet the branch's n = 5 and 6, clear and read at their own orders,
+    lie above it: n = 8 there would make the branch fall. It keeps n = 4, not aliased (the
+    ruler's truth for the ring: n = 4 at 98.34 Hz beside the branch's n = 4 at 90.37 Hz);
+    the branch's own modes keep theirs. A weak such mode is still read as the alias (the
+    test above)."""
+    th = _grid(12)
+    modes = [(n, 0.5) for n in range(1, 7)] + [(4, 0.5)]
+    f = [40.0, 55.0, 70.0, 85.0, 100.0, 110.0, 92.0]
+    res = classify(f, _shapes(th, modes), th, LOCS, significance=[0.9, 0.9, 0.9, 0.9, 0.9, 0.9, 0.8],
+                   damping_ratio=[0.02] * 7)
+    assert [c.n for c in res] == [1, 2, 3, 4, 5, 6, 4]
+    assert not any(c.aliased for c in res)
+    assert all(c.in_order for c in res[:6])

@@ -198,16 +198,46 @@ def _resolve_aliases(m: _Modes) -> list[int]:
     ns = [o.n_spatial for o in m.reads]
     for br in {o.branch for o in m.reads}:
         idx = sorted((r for r in range(len(m.reads)) if m.reads[r].branch == br), key=lambda r: m.freq_hz[r])
-        _walk_branch(m, idx, ns)
+        own: set[int] = set()
+        for _ in range(len(idx)):  # each pass can only add to ``own``
+            _walk_branch(m, idx, ns, own)
+            wrong = _contradicted(m, idx, ns) - own
+            if not wrong:
+                break
+            own |= wrong
     return ns
 
 
-def _walk_branch(m: _Modes, idx: list[int], ns: list[int]) -> None:
-    """:func:`_resolve_aliases` along one branch's modes ``idx`` (by frequency), into ``ns``."""
+def _contradicted(m: _Modes, idx: list[int], ns: list[int]) -> set[int]:
+    """The modes of one branch read as aliases that a clear mode of the branch above them
+    contradicts: one more than a split pair's 5 % higher, read at its own spatial order
+    (unaliased), and that order lies between the mode's spatial order and its alias —
+    the alias would make the branch fall, its spatial order keeps it rising. Such a mode
+    lies off the branch's dispersion (a family the branch does not hold: the ring's
+    sidewall-shear modes of n = 1–5 at 93–98 Hz, beside the branch's own n = 4 at 90 Hz
+    and n = 6 at 126 Hz); it keeps its spatial order."""
+    f, reads = m.freq_hz, m.reads
+    out = set()
+    for i, r in enumerate(idx):
+        n_s = reads[r].n_spatial
+        if ns[r] == n_s or not m.clear(r):  # a weak mode's reading is no evidence against the walk
+            continue
+        if any(f[q] > 1.05 * f[r] and m.clear(q) and ns[q] == reads[q].n_spatial and n_s < ns[q] < ns[r]
+               for q in idx[i + 1:]):
+            out.add(r)
+    return out
+
+
+def _walk_branch(m: _Modes, idx: list[int], ns: list[int], own: frozenset | set = frozenset()) -> None:
+    """:func:`_resolve_aliases` along one branch's modes ``idx`` (by frequency), into ``ns``;
+    the modes ``own`` keep their spatial order and do not move the mark (:func:`_contradicted`)."""
     f, reads, n_top = m.freq_hz, m.reads, max_order(m.n_points)
     top = -1
     for i, r in enumerate(idx):
         n = reads[r].n_spatial
+        if r in own:
+            ns[r] = n
+            continue
         # an alias needs its true order seen below it: the lower spatial order alone is
         # no evidence (the breathing mode n = 0 can sit anywhere on the branch: with a
         # stiff tangential or membrane term it lies above dozens of orders)
