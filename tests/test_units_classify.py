@@ -246,3 +246,16 @@ def test_a_clear_mode_off_the_branch_keeps_its_order_when_its_alias_would_make_t
     assert [c.n for c in res] == [1, 2, 3, 4, 5, 6, 4]
     assert not any(c.aliased for c in res)
     assert all(c.in_order for c in res[:6])
+
+
+def test_on_a_grid_with_failed_points_the_walk_alone_reads_the_aliases():
+    """The configuration above with one of the 12 points failed: a spatial reading then holds
+    every order's leak (modal.gaps), and the walk's reading stands — the extra order-4 mode
+    is the alias 8, as before session 13 (the paper's failed-points case: its n = 8 at 147.2
+    Hz, read as spatial order 2, would otherwise be given n = 2)."""
+    th = np.delete(_grid(12), 5)
+    modes = [(n, 0.5) for n in range(1, 7)] + [(4, 0.5)]
+    f = [40.0, 55.0, 70.0, 85.0, 100.0, 110.0, 92.0]
+    res = classify(f, _shapes(th, modes), th, LOCS, significance=[0.9, 0.9, 0.9, 0.9, 0.9, 0.9, 0.8],
+                   damping_ratio=[0.02] * 7)
+    assert res[6].n_spatial == 4 and res[6].n == 8 and res[6].aliased

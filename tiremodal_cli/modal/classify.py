@@ -112,6 +112,7 @@ class _Modes:
     significance: np.ndarray | None
     significance_group: np.ndarray | None
     free_rim: bool = False
+    complete: bool = True  # every point of the grid measured (no failed points)
 
     def clear(self, r: int) -> bool:
         """Both confidences ≥ 0.5 and (when known) significance ≥ 0.3."""
@@ -144,7 +145,8 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     n_p = grid_points(point_angle)  # points failed on a uniform grid alias as the whole grid
     reads = [_read(shapes[r], it, isw, point_angle) for r in range(len(freq_hz))]
     free_rim = _free_rim(shapes, locs)
-    ns = _resolve_aliases(_Modes(freq_hz, reads, n_p, significance, significance_group, free_rim))
+    ns = _resolve_aliases(_Modes(freq_hz, reads, n_p, significance, significance_group, free_rim,
+                                 complete=n_p == len(point_angle)))
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
     reads = _partners_branches(freq_hz, reads, ns)
     reads = _other_branch(freq_hz, reads, ns, in_order, n_p)
@@ -201,7 +203,7 @@ def _resolve_aliases(m: _Modes) -> list[int]:
         own: set[int] = set()
         for _ in range(len(idx)):  # each pass can only add to ``own``
             _walk_branch(m, idx, ns, own)
-            wrong = _contradicted(m, idx, ns) - own
+            wrong = (_contradicted(m, idx, ns) - own) if m.complete else set()
             if not wrong:
                 break
             own |= wrong
@@ -215,7 +217,10 @@ def _contradicted(m: _Modes, idx: list[int], ns: list[int]) -> set[int]:
     the alias would make the branch fall, its spatial order keeps it rising. Such a mode
     lies off the branch's dispersion (a family the branch does not hold: the ring's
     sidewall-shear modes of n = 1–5 at 93–98 Hz, beside the branch's own n = 4 at 90 Hz
-    and n = 6 at 126 Hz); it keeps its spatial order."""
+    and n = 6 at 126 Hz); it keeps its spatial order. Only on a complete grid: with points
+    missing every order leaks into every spatial reading (:mod:`tiremodal_cli.modal.gaps`),
+    and the paper's failed-points case's n = 8 same at 147.2 Hz, read as spatial order 2, was
+    given n = 2 (its diagnosis's final fit 0.09 → 2.1 % RMS, 8 modes set aside)."""
     f, reads = m.freq_hz, m.reads
     out = set()
     for i, r in enumerate(idx):
