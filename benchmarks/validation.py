@@ -266,6 +266,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1295 / 1334 (97 %) | 9 / 1626 (0.6 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-24, end of session 12 | the crowd test's same-direction branch continued by the model's saturating law; weak poles refined with their group's dropped poles in the basis; a pole biased by the band's wrap re-estimated with a guard band; with failed points, the unfound orders proposed from the dispersion and refined jointly in the physical FRFs with residues held to their orders (#14) | paper | 1170 / 1212 (97 %) | 18 / 1448 (1.2 %) | 0 | 14 / 14 | 13 / 13 | 2.9 min |
 | | | ring | 1298 / 1334 (97 %) | 8 / 1626 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-24, end of session 13 | a clear mode whose alias would make its branch fall below a clear mode read at its own order keeps its spatial order, on complete grids (#14); measured and not adopted: model-free tests of the added mass's blends, the joint refinement on complete grids, group poles kept apart | paper | 1170 / 1212 (97 %) | 18 / 1448 (1.2 %) | 0 | 14 / 14 | 13 / 13 | 2.9 min |
+| | | ring | 1301 / 1334 (98 %) | 8 / 1626 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
