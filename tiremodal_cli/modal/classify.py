@@ -16,7 +16,9 @@
   branch holds more than 5 % lower (farther than a split pair) is an alias even before the
   mark reaches ⌊N/2⌋: each order appears once per branch — except n = 1 with a free rim
   (a live rim channel), which adds the rim's mode to the tyre's n = 1 modes: there a third
-  n = 1 reading of a branch is the first alias. Only clear modes (both
+  n = 1 reading of a branch is the first alias. On a complete grid a clear mode keeps
+  its spatial order when its alias would make the branch fall below a clear mode read at
+  its own order (a family the branch does not hold; :func:`_contradicted`). Only clear modes (both
   confidences ≥ 0.5, significance ≥ 0.3) move the mark; a mode clear only in its own order
   group moves it by continuing the branch (at most two orders up).
 * **confidences**: ``n_confidence`` is the winning order's energy share; the branch's is
