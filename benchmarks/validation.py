@@ -235,6 +235,8 @@ estimator gives 0.67 σ.
 
 Reproduce: `python benchmarks/validation.py` (about {minutes:.0f} minutes with {jobs} workers on
 the machine below). The test suite runs a seeded subset (`tests/test_validation.py`).
+Two runs (`--out`) compared case by case, the fits as well as the counts (a change can keep
+every count and move a diagnosis): `python benchmarks/compare_runs.py BEFORE.jsonl AFTER.jsonl`.
 """
 
 
