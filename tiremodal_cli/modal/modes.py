@@ -29,6 +29,7 @@ from tiremodal_cli.modal.guard import guarded_diagram
 from tiremodal_cli.modal.lsce import bridge, poles_to_modal, principal_responses, sweep, sweep_poly
 from tiremodal_cli.modal.lsfd import mpc
 from tiremodal_cli.modal.merge import GroupMode, leak_copies, merge_groups, off_edges, swap_cost, under_residual
+from tiremodal_cli.modal.misreads import without_misreads
 from tiremodal_cli.modal.options import ModalOptions
 from tiremodal_cli.modal.plscf import sweep_plscf
 from tiremodal_cli.modal.spatial import decompose, grid_points, leakage
@@ -380,8 +381,9 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
         live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels]
         locs = [r.channel_location[i] for i in live]
         if "tread" in locs:
-            classes = classify(res.freq_hz, res.shapes[:, live], r.point_angle, locs, res.significance,
-                               res.damping_ratio, res.meta.get("significance_in_group"))
+            res, classes = without_misreads(res, lambda m: classify(
+                m.freq_hz, m.shapes[:, live], r.point_angle, locs, m.significance, m.damping_ratio,
+                m.meta.get("significance_in_group")))
             res.meta["crowds"] = [{"frequency_hz": float(res.freq_hz[i]), "n_spatial": c.n_spatial,
                                    "n_candidates": list(c.n_candidates),
                                    "reason": "orders aliasing onto one spatial order lie within one half-power "
