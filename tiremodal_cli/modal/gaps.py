@@ -65,7 +65,13 @@ def order_lsfd(freq_hz, Hb, angles_rad, poles, orders, form: str = "accelerance"
     Y = np.concatenate([Hb.real, Hb.imag], axis=2).reshape(n_c * n_p, 2 * K)
     Z = (Y @ Q).reshape(n_c, n_p, -1).transpose(1, 2, 0)  # (n_p, nb, n_c)
     G, units = order_design(D, [[k for k, (n, _) in enumerate(names) if n in orders[r]] for r in range(M)], R, M)
-    x = scipy.linalg.lstsq(G, Z.reshape(-1, n_c), lapack_driver="gelsy")[0]
+    # the minimum-norm solution at the design's numerical rank (singular values under
+    # eps · max(shape) of the largest, numpy's default): a mode's columns and the points'
+    # residual terms can be exactly dependent on an irregular set of points (19 of 24: four
+    # singular values at 1e-16 of the largest, the next at 5e-3), and the pivoted QR of
+    # gelsy kept them, returning residues 10¹⁴ × the data's that cancel in the FRFs but not
+    # in the order groups (every mode then lost: "no stable mode")
+    x = scipy.linalg.lstsq(G, Z.reshape(-1, n_c), cond=np.finfo(float).eps * max(G.shape), lapack_driver="gelsd")[0]
     nu = len(units)
     X = np.zeros((M, len(names), n_c), dtype=complex)
     for u, (r, k) in enumerate(units):
