@@ -30,7 +30,7 @@ from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import pole_basis, synthesize
 from tiremodal_cli.modal.spatial import decompose, grid_design
 
-__all__ = ["order_lsfd", "order_design", "cleaned_groups", "weak_in_frfs"]
+__all__ = ["order_lsfd", "order_design", "min_norm_solve", "cleaned_groups", "weak_in_frfs"]
 
 
 def order_lsfd(freq_hz, Hb, angles_rad, poles, orders, form: str = "accelerance") -> np.ndarray:
@@ -65,18 +65,27 @@ def order_lsfd(freq_hz, Hb, angles_rad, poles, orders, form: str = "accelerance"
     Y = np.concatenate([Hb.real, Hb.imag], axis=2).reshape(n_c * n_p, 2 * K)
     Z = (Y @ Q).reshape(n_c, n_p, -1).transpose(1, 2, 0)  # (n_p, nb, n_c)
     G, units = order_design(D, [[k for k, (n, _) in enumerate(names) if n in orders[r]] for r in range(M)], R, M)
-    # the minimum-norm solution at the design's numerical rank (singular values under
-    # eps · max(shape) of the largest, numpy's default): a mode's columns and the points'
-    # residual terms can be exactly dependent on an irregular set of points (19 of 24: four
-    # singular values at 1e-16 of the largest, the next at 5e-3), and the pivoted QR of
-    # gelsy kept them, returning residues 10¹⁴ × the data's that cancel in the FRFs but not
-    # in the order groups (every mode then lost: "no stable mode")
-    x = scipy.linalg.lstsq(G, Z.reshape(-1, n_c), cond=np.finfo(float).eps * max(G.shape), lapack_driver="gelsd")[0]
+    x = min_norm_solve(G, Z.reshape(-1, n_c))
     nu = len(units)
     X = np.zeros((M, len(names), n_c), dtype=complex)
     for u, (r, k) in enumerate(units):
         X[r, k] = x[u] / scale[r] + 1j * x[nu + u] / scale[M + r]
     return X
+
+
+def min_norm_solve(G, Z) -> np.ndarray:
+    """The minimum-norm least-squares solution of G x ≈ Z at G's numerical rank (singular
+    values under eps · max(G.shape) of the largest dropped, numpy's default rank rule; SVD).
+
+    The order-held design is exactly rank-deficient when a mode holds more of the grid's
+    columns than there are points (a mode merged from many order groups: 21 columns on 19
+    of 24 points gave four singular values at 1e-16 of the largest, the next at 5e-3); the
+    pivoted QR of LAPACK's gelsy kept those directions and returned residues 10¹⁴ × the
+    data's, which cancel in the FRFs but not in the order groups (session 14: every mode of
+    the paper's failed-points combination lost, "no stable mode", at two of six seeds).
+    """
+    return scipy.linalg.lstsq(G, Z, cond=np.finfo(float).eps * max(G.shape), lapack_driver="gelsd",
+                              check_finite=False)[0]
 
 
 def order_design(D, cols, R, M: int) -> tuple:

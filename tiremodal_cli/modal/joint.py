@@ -44,7 +44,7 @@ import scipy.special
 
 from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.modal.classify import classify
-from tiremodal_cli.modal.gaps import order_design
+from tiremodal_cli.modal.gaps import min_norm_solve, order_design
 from tiremodal_cli.modal.groupfit import NOISE_ALPHA
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import pole_basis, significance, synthesize
@@ -166,7 +166,7 @@ def _fit(freq, Yr, D, cols, s, q):
     Y = Yr.reshape(n_c * n_p, -1)
     Z = (Y @ Q).reshape(n_c, n_p, -1).transpose(1, 2, 0).reshape(-1, n_c)
     G, units = order_design(D, cols, R, s.size)
-    x = scipy.linalg.lstsq(G, Z, lapack_driver="gelsy", check_finite=False)[0]
+    x = min_norm_solve(G, Z)  # a mode may hold more columns than there are points
     model = (G @ x).reshape(n_p, -1, n_c).transpose(2, 0, 1).reshape(n_c * n_p, -1) @ Q.T
     X = np.zeros((s.size, D.shape[1], n_c), dtype=complex)
     nu = len(units)
