@@ -82,7 +82,8 @@ def min_norm_solve(G, Z) -> np.ndarray:
     of 24 points gave four singular values at 1e-16 of the largest, the next at 5e-3); the
     pivoted QR of LAPACK's gelsy kept those directions and returned residues 10¹⁴ × the
     data's, which cancel in the FRFs but not in the order groups (session 14: every mode of
-    the paper's failed-points combination lost, "no stable mode", at two of six seeds).
+    the paper's failed-points combination lost, "no stable mode", at two of the
+    five other seeds tried).
     """
     return scipy.linalg.lstsq(G, Z, cond=np.finfo(float).eps * max(G.shape), lapack_driver="gelsd",
                               check_finite=False)[0]
