@@ -12,6 +12,10 @@
    its half-power half-width) on its mass line, its peak 0, 4 or 8 × the noise RMS per line
    (the weak modes the scatter rule scaled by the bandwidth judges, `groupfit.pin_limit`):
    modes more than 0.3 % from a true one are false alarms, true modes without one are misses.
+4. **A quiet channel**: the broad setting on two channels of one point, each with its own
+   noise floor (0.5 % of its RMS, as a sensor's), the second 4 × quieter than the first and
+   alone holding the weak mode, its peak 0, 4 or 10 × that channel's noise (the per-row
+   visibility of the own-peak rule, `groupfit.row_visibility`, session 15).
 
 Prints one line per setting: trials, false alarms per trial, trials with any false alarm,
 misses. Seeds 0 … trials − 1.
@@ -77,6 +81,30 @@ def broad_modes(seed, weak_over_noise):
     return false, missed
 
 
+def quiet_channel(seed, weak_over_own_noise, loud=4.0):
+    """The broad setting's modes on two channels of one point: a loud one (the strong mode)
+    and one ``loud`` × quieter holding the strong mode too and the weak one, whose peak is
+    ``weak_over_own_noise`` × that channel's noise RMS per line; each channel's noise is
+    complex white, 0.5 % of its own RMS. Scored as :func:`broad_modes`."""
+    rng = np.random.default_rng(seed)
+    zeta, fn = 0.02, np.array([100.0, 400.0])
+    s = -zeta * 2 * np.pi * fn + 1j * 2 * np.pi * fn * np.sqrt(1 - zeta**2)
+    f = np.arange(0, 600, 0.25)
+    peak_unit = np.abs(s) ** 2 / np.abs(s.real)
+    quiet = synthesize(f, np.array([[1.0 / loud, 0.0]]), s, form="accelerance")[0]
+    floor = 0.005 * np.sqrt(np.mean(np.abs(quiet) ** 2))
+    quiet = quiet + synthesize(f, np.array([[0.0, weak_over_own_noise * floor / peak_unit[1]]]), s,
+                               form="accelerance")[0]
+    H = np.stack([synthesize(f, np.array([[1.0, 0.0]]), s, form="accelerance")[0], quiet])
+    rms = np.sqrt(np.mean(np.abs(H) ** 2, axis=1, keepdims=True))
+    H = H + 0.005 * rms / np.sqrt(2) * (rng.standard_normal(H.shape) + 1j * rng.standard_normal(H.shape))
+    res = estimate_modes(f, H[:, None, :], form="accelerance", opt=ModalOptions(band_hz=(20, 580), max_order=30))
+    true = fn if weak_over_own_noise > 0 else fn[:1]
+    false = sum(np.min(np.abs(true / x - 1)) > 3e-3 for x in res.freq_hz)
+    missed = sum(res.freq_hz.size == 0 or np.min(np.abs(res.freq_hz / x - 1)) > 3e-3 for x in true)
+    return false, missed
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--trials", type=int, default=20)
@@ -86,7 +114,10 @@ def main():
                 ("4 modes, 1 FRF, 2 % noise", lambda k: four_modes(k, 0.02)),
                 ("broad mode (ζ = 2 %) and noise only", lambda k: broad_modes(k, 0.0)),
                 ("broad mode and a broad weak one at 4 × the noise", lambda k: broad_modes(k, 4.0)),
-                ("broad mode and a broad weak one at 8 × the noise", lambda k: broad_modes(k, 8.0))]
+                ("broad mode and a broad weak one at 8 × the noise", lambda k: broad_modes(k, 8.0)),
+                ("two channels, the quiet one's noise only", lambda k: quiet_channel(k, 0.0)),
+                ("two channels, a weak mode at 4 × the quiet one's noise", lambda k: quiet_channel(k, 4.0)),
+                ("two channels, a weak mode at 10 × the quiet one's noise", lambda k: quiet_channel(k, 10.0))]
     print("| data | trials | false alarms / trial | trials with any | misses / trial |")
     print("|---|---|---|---|---|")
     for name, fn in settings:

@@ -166,9 +166,10 @@ def _weakest(data: GroupData, synthesis, s, sig, refit, own_peak):
     return None, ""
 
 
-#: a weak mode's peak in its group, at least this many times the group's residual RMS per
-#: line: the visibility rule (a peak three times the noise floor; one complex Gaussian row
-#: reaches it on a given line with probability e^−9 = 1.2e-4)
+#: a weak mode's peak in its group, at least this many times the residual RMS per line of
+#: the row that shows it best: the visibility rule (a peak three times the noise floor; one
+#: complex Gaussian row reaches it on a given line with probability e^−9 = 1.2e-4, any of
+#: R rows at most R × that: 7e-4 for a tyre's two harmonics × three channels)
 PEAK_OVER_NOISE = 3.0
 
 
@@ -180,12 +181,13 @@ def own_peaks(data: GroupData, s, residues, synthesis, strength, std_hz) -> np.n
     max(ζ_k f_k, one line) (the merge's window, and the FRFs' resolution: inside it the
     stronger mode's own peak is there, and the data do not tell a weak pole from it — the
     same-direction crowd under the sidewall resonance; the real beam's 687.27 Hz pole,
-    0.11 Hz from its 687.17 Hz mode with 1 Hz lines), (b) its peak in the
-    group's rows at resonance, ‖r‖ |s|² / |Re s|, is at least :data:`PEAK_OVER_NOISE` ×
-    the group's residual RMS per line (rows' norm, noise and misfit alike), and (c) its
-    pole is pinned by the data: the scatter of its cluster over the model orders
+    0.11 Hz from its 687.17 Hz mode with 1 Hz lines), (b) its peak at resonance is at
+    least :data:`PEAK_OVER_NOISE` × the residual RMS per line in the row that shows it
+    best (:func:`row_visibility`; until session 15 the rows' norm, ‖r‖ |s|² / |Re s|
+    against the norm's RMS, which let the loud rows' noise hide a mode of a quiet one),
+    and (c) its pole is pinned by the data: the scatter of its cluster over the model orders
     (``std_hz``, Hz) is at most one line spacing (the FRFs' resolution) or, for a broad
-    mode, :data:`PIN_SIGMAS` × its frequency's standard error in that residual
+    mode, :data:`PIN_SIGMAS` × its frequency's standard error in the rows' residual (norm)
     (:func:`pin_limit`, since session 10) — a bound for a mode alone in its band, so
     applied only when its half-power band lies inside the analysis band and overlaps the
     half-power band of no stronger mode of its group, |f_k − f_r| ≥ ζ_k f_k + ζ_r f_r. Its share of the
@@ -204,13 +206,32 @@ def own_peaks(data: GroupData, s, residues, synthesis, strength, std_hz) -> np.n
     df = data.freq[1] - data.freq[0]
     std_hz, hw = np.asarray(std_hz, dtype=float), zeta * fn
     inside = (fn - hw >= data.freq[0]) & (fn + hw <= data.freq[-1])  # the bound needs both flanks
-    out = (peak >= PEAK_OVER_NOISE * noise) & (std_hz <= np.where(inside, pin_limit(hw, df, peak / noise), df))
+    visible = row_visibility(residues, s, res) >= PEAK_OVER_NOISE
+    out = visible & (std_hz <= np.where(inside, pin_limit(hw, df, peak / noise), df))
     for r in np.flatnonzero(out):
         stronger = strength > strength[r]
         out[r] = not np.any(stronger & (np.abs(fn - fn[r]) <= np.maximum(hw, df)))
         if out[r] and std_hz[r] > df:  # the bound holds for a mode alone in its half-power band
             out[r] = not np.any(stronger & (np.abs(fn - fn[r]) < hw + hw[r]))
     return out
+
+
+def row_visibility(residues, s, res) -> np.ndarray:
+    """Each mode's peak over the noise floor in the row that shows it best, (n_modes,).
+
+    residues : (n_rows, n_modes) complex ; s : (n_modes,) poles, rad/s ;
+    res : (n_rows, K) complex, the rows less the fit (noise and misfit alike).
+
+    Row i's peak at resonance is |r_i| |s|² / |Re s| and its floor the RMS of its residual
+    over the band. Judged row by row, as a test engineer reads FRFs (and as the ruler's
+    "visible" reads the best channel and point): the rows' noise differs by the channels'
+    levels (a sensor's noise scales with its own response), and a norm over all rows puts
+    the loud rows' noise under a mode that lives in a quiet one (the paper's sidewall
+    same-direction n = 56 … 60: 1.8–2.9 × the norm's floor, 11–29 × its best row's).
+    """
+    floor = np.sqrt(np.mean(res.real**2 + res.imag**2, axis=1))
+    peak = np.abs(residues) * (np.abs(s) ** 2 / np.abs(s.real))[None, :]
+    return np.max(peak / np.maximum(floor, np.finfo(float).tiny)[:, None], axis=0)
 
 
 #: a pinned pole's scatter over the model orders, at most this many times the standard
