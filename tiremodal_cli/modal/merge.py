@@ -42,6 +42,7 @@ class GroupMode:
     significance_in_group: float
     group_noise: float = 0.0  # the group's residual after its fit, RMS over the band's lines (rows' norm)
     peak: float = 0.0  # the mode's response in its group's rows (accelerance) at resonance, ‖r‖ |s|² / |Re s|
+    visibility: float = 0.0  # its peak over the residual RMS in the row that shows it best (groupfit.row_visibility)
 
 
 @dataclass(frozen=True)
@@ -170,7 +171,8 @@ def _pinned_apart(a: GroupMode, b: GroupMode, fa: float, fb: float, line_hz: flo
     mode the share does not support, kept by its group's share or its own peak), (b)
     stands on a peak of its own in its group and is pinned there (the own-peak rule,
     :func:`~tiremodal_cli.modal.groupfit.own_peaks`: its peak at least
-    :data:`~tiremodal_cli.modal.groupfit.PEAK_OVER_NOISE` × its group's residual RMS, its
+    :data:`~tiremodal_cli.modal.groupfit.PEAK_OVER_NOISE` × the residual RMS of the row of
+    its group that shows it best (:attr:`GroupMode.visibility`; the rows' norm until session 15), its
     cluster's frequency scatter σ at most ``line_hz``, the FRFs' resolution), and (c) the
     two lie more than a line and more than 3 √(σ_a² + σ_b²) apart: one pole estimated in
     two groups gives estimates within their scatter (3 σ: a 0.3 % false split for Gaussian
@@ -186,7 +188,7 @@ def _pinned_apart(a: GroupMode, b: GroupMode, fa: float, fb: float, line_hz: flo
     (c); seen: a pinned leak of the ring's opposite n = 18 with a free rim, 3.8 Hz
     above it, at 1.6 × its group's residual).
     """
-    if line_hz <= 0 or any(m.frequency_std_hz > line_hz or m.peak < PEAK_OVER_NOISE * m.group_noise
+    if line_hz <= 0 or any(m.frequency_std_hz > line_hz or m.visibility < PEAK_OVER_NOISE
                            or m.significance >= min_significance for m in (a, b)):
         return False
     return abs(fa - fb) > max(line_hz, 3 * float(np.hypot(a.frequency_std_hz, b.frequency_std_hz)))

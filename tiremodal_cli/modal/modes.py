@@ -21,7 +21,7 @@ from tiremodal_cli.frf.windows import correct_poles
 from tiremodal_cli.modal.band import band_or_every_line, default_band, no_stable_mode, order_for_lines
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.gaps import cleaned_groups, weak_in_frfs
-from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly
+from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly, row_visibility
 from tiremodal_cli.modal.joint import add_missing_orders
 from tiremodal_cli.modal.refine import dropped_poles, refine_adopted
 from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
@@ -297,9 +297,11 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
         return d, [], rej, None, None
     scatter = {c.representative.s: c.frequency_std_hz for c in d.selected()}
     noise = float(np.sqrt(np.mean(np.sum(np.abs(data.rows - fit.synthesis) ** 2, axis=0))))
+    seen = row_visibility(fit.residues, s, data.rows - fit.synthesis)
     modes = [GroupMode(s[k], data.group, data.back @ fit.residues[:, k], float(fit.significance[k]),
                        scatter[complex(s[k])], swap_cost(data.rows, fit.synthesis, s, k, refit),
-                       float(fit.own[k]), noise, float(np.linalg.norm(fit.residues[:, k]) * abs(s[k]) ** 2 / abs(s[k].real)))
+                       float(fit.own[k]), noise, float(np.linalg.norm(fit.residues[:, k]) * abs(s[k]) ** 2 / abs(s[k].real)),
+                       float(seen[k]))
              for k in range(s.size)]
     if not data.opt.refine:
         return d, modes, rej, data.back @ fit.synthesis, None
