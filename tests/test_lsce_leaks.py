@@ -97,20 +97,21 @@ def test_a_free_rims_n1_modes_are_read_as_n1_not_as_aliases(ring_rim):
         assert any(r["n"] == 1 and not r["aliased"] for r in rows), (f, rows)
 
 
-def _group_mode(f_hz, group, std_hz, sig=0.008, peak=0.05, noise=0.01, zeta=0.038):
+def _group_mode(f_hz, group, std_hz, sig=0.008, peak=0.05, noise=0.01, zeta=0.038, visibility=5.0):
     """A GroupMode of the paper's sidewall same-direction crowd (ζ ≈ 3.8 %) whose group's
-    data accept any pole (a swap cost of 0: a residual of misfit, as seen there)."""
+    data accept any pole (a swap cost of 0: a residual of misfit, as seen there); its peak
+    ``visibility`` × the residual RMS of the row that shows it best."""
     from tiremodal_cli.modal.merge import GroupMode
     s = complex(-zeta * 2 * np.pi * f_hz, 2 * np.pi * f_hz * np.sqrt(1 - zeta**2))
     theta = 2 * np.pi * np.arange(34) / 34
     return GroupMode(s, group, np.cos(group * theta).astype(complex), sig, std_hz, lambda pole: 0.0, 0.06,
-                     noise, peak)
+                     noise, peak, visibility)
 
 
 @pytest.mark.parametrize("change, n_modes", [
     ({}, 2),                          # each pinned, on a peak of its own, weak, 4.5 Hz apart: two modes
     ({"std_hz": 0.6}, 1),             # one wanders over more than a line: the swap test judges (one pole)
-    ({"peak": 0.02}, 1),              # one under 3 × its group's residual: the swap test judges
+    ({"visibility": 2.0}, 1),         # one under 3 × the residual of its best row: the swap test judges
     ({"sig": 0.3}, 1),                # one strong: its swap test has the power to judge
     ({"f_hz": 280.5}, 1),             # within a line (0.5 Hz) of the other: the FRFs cannot tell them
 ])
