@@ -247,7 +247,7 @@ HELD_OUT = """## Held out: the same tests on noise the rules were never measured
 Every threshold measured on this matrix was measured on its seeds. `--seed-offset N` runs
 the same 55 tests with every case's seed moved by N — other noise, other double hits and
 overloads, other failed points — and is the check on how far the scorecard above
-generalises. Session 14 (records not kept; `--jobs 2`, same machine):
+generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine):
 
 | run | code | generator | found / expected | mislabelled | spurious / adopted | cases over 5 % spurious | effect cases right | run errors |
 |---|---|---|---|---|---|---|---|---|
@@ -257,6 +257,10 @@ generalises. Session 14 (records not kept; `--jobs 2`, same machine):
 | | | ring | 1284 / 1334 (96 %) | 7 | 11 / 1584 (0.7 %) | 1: mass 4 / 65 | 13 / 14 (mass) | 0 |
 | seeds + 2000 | b1ce266 | paper | 1161 / 1212 (96 %) | 15 | 11 / 1418 (0.8 %) | 1: failed-points combination 4 / 66 | 12 / 13 (failed-points combination: rhoA) | 0 |
 | | | ring | 1285 / 1334 (96 %) | 8 | 6 / 1581 (0.4 %) | 0 | 12 / 14 (mass: air_cavity beside added_mass; 5,120 Hz Timoshenko + rim: m_w alone, the Timoshenko fit ending on rhoI's bound) | 0 |
+| seeds + 1000 | 76eda77 (end of session 15) | paper | 1175 / 1212 (97 %) | 7 | 18 / 1414 (1.3 %) | 1: failed-points combination 11 / 69 | 13 / 13 | 0 |
+| | | ring | 1287 / 1334 (96 %) | 7 | 12 / 1590 (0.8 %) | 1: mass 4 / 65 | 13 / 14 (mass: air_cavity beside added_mass) | 0 |
+| seeds + 2000 | 76eda77 | paper | 1167 / 1212 (96 %) | 14 | 13 / 1426 (0.9 %) | 1: failed-points combination 4 / 66 | 12 / 13 (failed-points combination: rhoA) | 0 |
+| | | ring | 1286 / 1334 (96 %) | 8 | 6 / 1582 (0.4 %) | 0 | 12 / 14 (as on b1ce266) | 0 |
 
 What does not hold on other seeds: (1) **the paper's failed-points combination** (2,560 Hz,
 24 points, one hit, 2 % noise, double hits and overloads: 5 points fail) — at seven seeds
@@ -304,6 +308,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1301 / 1334 (98 %) | 8 / 1626 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-24, end of session 14 | a weak mode out of its branch's order at its spatial order, no narrower than its neighbours, dropped as a misread (the added mass's blends); with failed points the order-held fits solved at their numerical rank (#14); `--seed-offset` for held-out noise (above) | paper | 1170 / 1212 (97 %) | 6 / 1416 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 3.1 min |
 | | | ring | 1301 / 1334 (98 %) | 7 / 1601 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-24, end of session 15 | a weak mode's peak judged against the noise of the group's row that shows it best, not the rows' norm (the own-peak and pinned-apart rules; #14); measured and not adopted: a matched-filter reading of the norm, the sweep's channels whitened by their noise floor | paper | 1178 / 1212 (97 %) | 7 / 1424 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 3.2 min |
+| | | ring | 1301 / 1334 (98 %) | 7 / 1600 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
