@@ -254,7 +254,7 @@ HELD_OUT = """## Held out: the same tests on noise the rules were never measured
 Every threshold measured on this matrix was measured on its seeds. `--seed-offset N` runs
 the same 55 tests with every case's seed moved by N — other noise, other double hits and
 overloads, other failed points — and is the check on how far the scorecard above
-generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine):
+generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3000 with `--jobs 1`, both codes in the same run):
 
 | run | code | generator | found / expected | mislabelled | spurious / adopted | cases over 5 % spurious | effect cases right | run errors |
 |---|---|---|---|---|---|---|---|---|
@@ -268,6 +268,10 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine):
 | | | ring | 1287 / 1334 (96 %) | 7 | 12 / 1590 (0.8 %) | 1: mass 4 / 65 | 13 / 14 (mass: air_cavity beside added_mass) | 0 |
 | seeds + 2000 | 76eda77 | paper | 1167 / 1212 (96 %) | 14 | 13 / 1426 (0.9 %) | 1: failed-points combination 4 / 66 | 12 / 13 (failed-points combination: rhoA) | 0 |
 | | | ring | 1286 / 1334 (96 %) | 8 | 6 / 1582 (0.4 %) | 0 | 12 / 14 (as on b1ce266) | 0 |
+| seeds + 3000 | ec5e4f1 (end of session 14) | paper | 1168 / 1212 (96 %) | 8 | 25 / 1421 (1.8 %) | 2: added mass 6 / 53, failed-points combination 11 / 72 | 12 / 13 (failed-points combination: rhoA) | 0 |
+| | | ring | 1291 / 1334 (97 %) | 7 | 9 / 1600 (0.6 %) | 0 | 12 / 14 (sidewall coupling: nothing adopted; mass: air_cavity beside added_mass) | 0 |
+| seeds + 3000 | 76eda77 | paper | 1173 / 1212 (97 %) | 6 | 27 / 1428 (1.9 %) | 3: the two above and the sidewall membrane 4 / 79 (its weak same n = 60 found 0.44 % high) | 12 / 13 (as above) | 0 |
+| | | ring | 1292 / 1334 (97 %) | 7 | 9 / 1602 (0.6 %) | 0 | 12 / 14 (as above) | 0 |
 
 What does not hold on other seeds: (1) **the paper's failed-points combination** (2,560 Hz,
 24 points, one hit, 2 % noise, double hits and overloads: 5 points fail) — at seven seeds
