@@ -202,7 +202,10 @@ low-frequency level),
 its peak accelerance at its best channel and point is at least 3 × the H1 noise floor, and
 no alias of its order (n' ≡ ±n mod N) on its branch lies within one half-power bandwidth
 (a degenerate cos/sin pair is one mode). It is *found* when the modal table has a mode
-within 0.3 % with the right n and branch (orders above N/2: flagged aliased; cavity and
+within 0.3 % with the right n and branch (orders above N/2: flagged aliased, in the order
+group the order aliases onto, n mod N folded to 0 … N/2 — since session 15; before, any
+aliased row counted, and in 14 paper cases a crowd row of another group stood for the
+n = N same mode at 167.3 Hz; cavity and
 tangential modes, which the tool has no label for: any label; a free rim's "rim" mode: n = 1, not aliased,
 either branch — the generators' "rim" label is the rim's share of the kinetic energy, which a test
 cannot measure without the masses), *mislabelled* when only the

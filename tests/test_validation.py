@@ -68,6 +68,24 @@ def test_counting_rules():
     assert (s["found"], s["missed"], s["mislabelled"]) == (2, 2, 0)
 
 
+@pytest.mark.parametrize("n_spatial, status", [
+    (14, "found"),           # n = 20 on 34 points aliases onto spatial order 14
+    (None, "found"),         # a table without spatial orders: the flag alone
+    (6, "mislabelled"),      # another order group's row at that frequency: another mode
+])
+def test_an_aliased_order_is_found_only_in_its_alias_class(n_spatial, status):
+    """An order above N/2 is found by a row flagged aliased whose spatial order is the
+    truth order's alias class (n mod N, folded): the same-direction crowd converging under
+    the sidewall resonance puts a row of every order group within 0.3 % of the paper's
+    n = 34 at 167.3 Hz, and a row of group 4 is not the n = 34 mode."""
+    g = {"frequency_hz": 300.0, "n": 20, "branch": "opposite", "zeta": 0.02, "expected": True, "aliased": True,
+         "alias_class": 14, "foreign": False, "valid": True, "crowd": False}
+    row = {"frequency_hz": 300.2, "damping_ratio": 0.02, "n": 14, "branch": "opposite", "aliased": True,
+           "n_spatial": n_spatial}
+    s = score_modes([g], [row], [{"frequency_hz": 300.0}])
+    assert s["detail"][0]["status"].startswith(status)
+
+
 @pytest.mark.parametrize("n, branch, aliased, status", [
     (1, "same", False, "found"),          # the rim's order, read on either branch
     (1, "opposite", False, "found"),

@@ -136,7 +136,7 @@ def expected_groups(sim, cfg: SimulationConfig) -> list[dict]:
         out.append({"frequency_hz": f, "members": list(g["members"]), "n": g["n"], "branch": g["branch"],
                     "zeta": g["zeta"],
                     "snr": float(best), "valid": bool(f * (1 + g["zeta"]) <= f_valid), "visible": bool(best >= 3.0),
-                    "aliased": bool(g["n"] > n_pts / 2),
+                    "aliased": bool(g["n"] > n_pts / 2), "alias_class": _alias(g["n"], n_pts),
                     "foreign": g["branch"] not in ("same", "opposite", "rim")})
     for g in out:
         bw = 2 * g["zeta"] * g["frequency_hz"]
@@ -155,7 +155,8 @@ def read_modes(path) -> list[dict]:
         n = r.get("n", "")
         out.append({"frequency_hz": float(r["frequency_hz"]), "damping_ratio": float(r["damping_ratio"]),
                     "n": int(n) if n not in ("", None) else None, "branch": r.get("branch") or None,
-                    "aliased": str(r.get("n_aliased", "")).lower() == "true"})
+                    "aliased": str(r.get("n_aliased", "")).lower() == "true",
+                    "n_spatial": int(r["n_spatial"]) if r.get("n_spatial") not in ("", None) else None})
     return out
 
 
@@ -170,8 +171,9 @@ def score_modes(groups: list[dict], rows: list[dict], truth_modes: list[dict]) -
             ok = [r for r in cand]
         elif g["branch"] == "rim":  # the rim mode of a free rim: its order, any branch (module docstring)
             ok = [r for r in cand if r["n"] == g["n"] and not r["aliased"]]
-        elif g["aliased"]:
-            ok = [r for r in cand if r["aliased"]]
+        elif g["aliased"]:  # flagged, and seen in the order group its order aliases onto
+            ok = [r for r in cand if r["aliased"] and (r.get("n_spatial") is None or "alias_class" not in g
+                                                       or r["n_spatial"] == g["alias_class"])]
         else:
             ok = [r for r in cand if r["n"] == g["n"] and r["branch"] == g["branch"] and not r["aliased"]]
         if ok:
