@@ -257,7 +257,7 @@ HELD_OUT = """## Held out: the same tests on noise the rules were never measured
 Every threshold measured on this matrix was measured on its seeds. `--seed-offset N` runs
 the same 55 tests with every case's seed moved by N — other noise, other double hits and
 overloads, other failed points — and is the check on how far the scorecard above
-generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3000 with `--jobs 1`, both codes in the same run):
+generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3000 with `--jobs 1`, both codes in the same run; all scored by the ruler before its alias-class rule of session 15, which on the matrix's seeds moves paper 16 and ring 4 found modes to mislabelled):
 
 | run | code | generator | found / expected | mislabelled | spurious / adopted | cases over 5 % spurious | effect cases right | run errors |
 |---|---|---|---|---|---|---|---|---|
@@ -322,8 +322,10 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1301 / 1334 (98 %) | 8 / 1626 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-24, end of session 14 | a weak mode out of its branch's order at its spatial order, no narrower than its neighbours, dropped as a misread (the added mass's blends); with failed points the order-held fits solved at their numerical rank (#14); `--seed-offset` for held-out noise (above) | paper | 1170 / 1212 (97 %) | 6 / 1416 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 3.1 min |
 | | | ring | 1301 / 1334 (98 %) | 7 / 1601 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
-| 2026-11-24, end of session 15 | a weak mode's peak judged against the noise of the group's row that shows it best, not the rows' norm (the own-peak and pinned-apart rules; #14); measured and not adopted: a matched-filter reading of the norm, the sweep's channels whitened by their noise floor | paper | 1178 / 1212 (97 %) | 7 / 1424 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 3.2 min |
+| 2026-11-24, session 15 (76eda77, the ruler before its alias-class rule) | a weak mode's peak judged against the noise of the group's row that shows it best, not the rows' norm (the own-peak and pinned-apart rules; #14); measured and not adopted: a matched-filter reading of the norm, the sweep's channels whitened by their noise floor, a channel-pattern veto in the merge | paper | 1178 / 1212 (97 %) | 7 / 1424 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 3.2 min |
 | | | ring | 1301 / 1334 (98 %) | 7 / 1600 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-24, end of session 15 | the same code; the ruler finds an aliased order only by a row of its alias class (the paper's n = N same at 167.3 Hz had been credited to a crowd row of another group in 14 cases: found → mislabelled) | paper | 1162 / 1212 (96 %) | 7 / 1424 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 3.2 min |
+| | | ring | 1297 / 1334 (97 %) | 7 / 1600 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
