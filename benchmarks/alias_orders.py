@@ -22,16 +22,11 @@ and by whether its branch is the truth's. ``--list`` prints every row of the las
 
 from __future__ import annotations
 
-import csv
-import json
 from collections import Counter
-from pathlib import Path
 
 from crowds import _alias
-from spurious import folder_of, matrix_parser
+from spurious import kept_cases, matrix_parser
 
-from tiremodal_cli.tyre.simulate import simulate
-from tiremodal_cli.workflow.validation import Case, config_for
 from tiremodal_cli.workflow.validation_scoring import TOLERANCE, expected_groups
 
 
@@ -66,15 +61,7 @@ def main(argv=None) -> int:
     ap.add_argument("--list", action="store_true", help="print every row of the right class or another class")
     a = ap.parse_args(argv)
     total: dict[str, Counter] = {}
-    for line in Path(a.records).read_text(encoding="utf-8").splitlines():
-        rec = json.loads(line)
-        if rec.get("status") != "ok" or (a.only and rec["name"] not in a.only):
-            continue
-        case = Case(**{k: v for k, v in rec["case"].items() if k in Case.__dataclass_fields__})
-        cfg = config_for(case)
-        sim = simulate(cfg)
-        with open(Path(a.keep) / folder_of(rec["name"]) / "run" / "modes.csv", newline="", encoding="utf-8") as fh:
-            rows = list(csv.DictReader(fh))
+    for rec, case, cfg, sim, rows in kept_cases(a.records, a.keep, a.only):
         t = total.setdefault(case.generator, Counter())
         for kind, branch_ok, g, r in alias_claims(expected_groups(sim, cfg), rows, len(sim.truth["point_angle_rad"])):
             t[kind, branch_ok] += 1

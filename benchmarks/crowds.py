@@ -16,14 +16,9 @@ alone), a *missed crowd* (not flagged, the truth's is a crowd) or right without 
 
 from __future__ import annotations
 
-import csv
-import json
-from pathlib import Path
 
-from spurious import folder_of, matrix_parser
+from spurious import kept_cases, matrix_parser
 
-from tiremodal_cli.tyre.simulate import simulate
-from tiremodal_cli.workflow.validation import Case, config_for
 from tiremodal_cli.workflow.validation_scoring import TOLERANCE, expected_groups
 
 
@@ -61,15 +56,7 @@ def main(argv=None) -> int:
     ap.add_argument("--list", action="store_true", help="print every false and missed crowd")
     a = ap.parse_args(argv)
     total: dict[str, dict[str, int]] = {}
-    for line in Path(a.records).read_text(encoding="utf-8").splitlines():
-        rec = json.loads(line)
-        if a.only and rec["name"] not in a.only:
-            continue
-        case = Case(**{k: v for k, v in rec["case"].items() if k in Case.__dataclass_fields__})
-        cfg = config_for(case)
-        sim = simulate(cfg)
-        with open(Path(a.keep) / folder_of(rec["name"]) / "run" / "modes.csv", newline="", encoding="utf-8") as fh:
-            rows = list(csv.DictReader(fh))
+    for rec, case, cfg, sim, rows in kept_cases(a.records, a.keep, a.only):
         counts, wrong = crowd_counts(expected_groups(sim, cfg), rows, len(sim.truth["point_angle_rad"]))
         t = total.setdefault(case.generator, dict.fromkeys(counts, 0))
         for k, v in counts.items():

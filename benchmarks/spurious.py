@@ -86,6 +86,20 @@ def matrix_parser(doc: str) -> argparse.ArgumentParser:
     return ap
 
 
+def kept_cases(records, keep, only=()):
+    """Each case of a kept validation run that ran: (record, its case, its simulation
+    config, the simulation, the modal table's rows as read from ``modes.csv``, strings)."""
+    for line in Path(records).read_text(encoding="utf-8").splitlines():
+        rec = json.loads(line)
+        if rec.get("status") != "ok" or (only and rec["name"] not in only):
+            continue
+        case = Case(**{k: v for k, v in rec["case"].items() if k in Case.__dataclass_fields__})
+        cfg = config_for(case)
+        with open(Path(keep) / folder_of(rec["name"]) / "run" / "modes.csv", newline="", encoding="utf-8") as fh:
+            rows = list(csv.DictReader(fh))
+        yield rec, case, cfg, simulate(cfg), rows
+
+
 def spurious_cases(records, keep, only=()):
     """Each kept case with spurious modes: (record, its run folder, the generator's truth
     modes, the modal table's rows)."""
