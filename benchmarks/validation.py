@@ -290,7 +290,10 @@ branch at 550–900 Hz, and at one seed three poles fitted to the noise below th
 split-pair members (the pairs split by 0.6 % at ζ = 2 %) and an air cavity adopted on a stray
 row read at spatial order 1 in the cavity band, its coupling γ insignificant (|t| 0.2–0.5);
 (3) **the weak sidewall modes** of the ring's sidewall coupling (with and without the mass):
-3–10 fewer found at other seeds — modes at the noise's edge, stable at few model orders.
+3–10 fewer found at other seeds — modes at the noise's edge, stable at few model orders;
+(4) since session 15, **the paper membrane's weak same-direction modes**, now found where
+their best channel shows them, are at times estimated 0.3–0.6 % off (crowded neighbours): at
++ 3000 the membrane goes over the bar, 4 of 79.
 """
 
 
