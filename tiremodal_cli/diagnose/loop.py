@@ -64,6 +64,7 @@ def _unexplained_rows(skipped, rows) -> list[dict]:
         out.append({"frequency_hz": float(s["frequency_hz"]), "n": s.get("n"), "branch": s.get("branch"),
                     "row": s.get("row"), "reason": reason,
                     "significance": _num(row.get("significance")), "n_spatial": _num(row.get("n_spatial")),
+                    "damping_ratio": _num(row.get("damping_ratio")),
                     "crowd": str(row.get("crowd", "")).strip().lower() in ("true", "1")})
     return out
 
