@@ -6,7 +6,7 @@
 For every spurious row of a kept case (``benchmarks/spurious.py``: no truth mode within
 0.3 %), the modal stage is run again on the kept ``run/frf.h5`` over the kept band (the
 same table to the bit: the stage is deterministic) and the adopted mode's quantities are
-printed against the conditions of :func:`tiremodal_cli.modal.merge.under_residual` — (a)
+printed against the conditions of :func:`tiremodal_cli.modal.leaks.under_residual` — (a)
 physical share < ``min_significance``, (c) frequency scatter over the model orders > one
 line, (d) a mode of another group with a larger peak within that mode's half-power
 half-width, (e) the channel MAC with the strongest of those ≥ 0.9 — with ``-`` where a
@@ -30,7 +30,7 @@ from tiremodal_cli.io.frffile import read_frf
 from tiremodal_cli.modal import modes as stage
 from tiremodal_cli.modal.groupfit import PEAK_OVER_NOISE
 from tiremodal_cli.modal.lsce import poles_to_modal
-from tiremodal_cli.modal.merge import channel_mac
+from tiremodal_cli.modal.leaks import channel_mac
 from tiremodal_cli.modal.options import ModalOptions
 
 

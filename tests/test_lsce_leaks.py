@@ -1,13 +1,14 @@
 """A weak, unpinned pole in the half-power band of a stronger mode of another order group
 is that mode's leak, not a mode (docs/lsce.md, "Across order groups";
-:func:`tiremodal_cli.modal.merge.under_residual`)."""
+:func:`tiremodal_cli.modal.leaks.under_residual`)."""
 
 import json
 
 import numpy as np
 import pytest
 
-from tiremodal_cli.modal.merge import MergedMode, under_residual
+from tiremodal_cli.modal.leaks import under_residual
+from tiremodal_cli.modal.merge import MergedMode
 from tiremodal_cli.workflow.validation import matrix, run_case
 from tiremodal_cli.workflow.validation_scoring import TOLERANCE, read_modes
 

@@ -1,13 +1,14 @@
 """An added mass breaks the tyre's symmetry: every mode puts response into every order group,
 and the weak poles fitted there are no modes (docs/lsce.md, "Across order groups",
-:func:`tiremodal_cli.modal.merge.under_residual` and its leak twins)."""
+:func:`tiremodal_cli.modal.leaks.under_residual` and its leak twins)."""
 
 import json
 
 import numpy as np
 import pytest
 
-from tiremodal_cli.modal.merge import SAME_POLE_ALPHA, MergedMode, under_residual
+from tiremodal_cli.modal.leaks import under_residual
+from tiremodal_cli.modal.merge import SAME_POLE_ALPHA, MergedMode
 from tiremodal_cli.workflow.validation import matrix, run_case
 from tiremodal_cli.workflow.validation_scoring import TOLERANCE, read_modes
 

@@ -16,7 +16,7 @@ from tiremodal_cli.errors import DataFormatError, ParameterError
 log = logging.getLogger(__name__)
 
 __all__ = ["COHERENCE_ALPHA", "FORCE_DROP_DB", "coherence_threshold", "default_band", "band_or_every_line",
-           "order_for_lines", "no_stable_mode"]
+           "order_for_lines", "no_stable_mode", "live_channels"]
 
 
 #: probability that a line of pure noise passes the coherence test in one FRF
@@ -128,3 +128,19 @@ def no_stable_mode(freq_hz, order: int) -> DataFormatError:
     return DataFormatError(f"no stable mode found in the band ({freq_hz[0]:g}–{freq_hz[-1]:g} Hz, {len(freq_hz)} "
                            f"lines, model orders up to {order}); allowed: a band that holds modes (widen it), a "
                            "higher --max-order (lsce), or longer records (more lines)")
+
+
+def live_channels(freq_hz, H) -> np.ndarray:
+    """(n_channels,) bool: the channels with FRFs (a dead one is NaN throughout, as ``tiremodal
+    frf`` marks it); NaN anywhere else is bad data."""
+    if H.ndim != 3 or H.shape[-1] != freq_hz.size:
+        raise DataFormatError(f"FRFs must be (n_channels, n_points, n_freq={freq_hz.size}); got {H.shape}")
+    live = ~np.array([np.all(np.isnan(H[c])) for c in range(H.shape[0])])
+    if not live.any():
+        raise DataFormatError("no channel has finite FRFs")
+    bad = ~np.isfinite(H[live])
+    if bad.any():
+        c, p, k = np.argwhere(bad)[0]
+        raise DataFormatError(f"FRF of channel {np.flatnonzero(live)[c] + 1}, point {p + 1} has a non-finite "
+                              f"value at {freq_hz[k]:g} Hz")
+    return live

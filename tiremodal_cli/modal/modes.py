@@ -18,7 +18,7 @@ from threadpoolctl import threadpool_limits
 from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.errors import DataFormatError, ParameterError
 from tiremodal_cli.frf.windows import correct_poles
-from tiremodal_cli.modal.band import band_or_every_line, default_band, no_stable_mode, order_for_lines
+from tiremodal_cli.modal.band import band_or_every_line, default_band, live_channels, no_stable_mode, order_for_lines
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.gaps import cleaned_groups, weak_in_frfs
 from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly, row_visibility
@@ -28,12 +28,14 @@ from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, store
 from tiremodal_cli.modal.guard import guarded_diagram
 from tiremodal_cli.modal.lsce import bridge, poles_to_modal, principal_responses, sweep, sweep_poly
 from tiremodal_cli.modal.lsfd import mpc
-from tiremodal_cli.modal.merge import GroupMode, leak_copies, merge_groups, off_edges, swap_cost, under_residual
+from tiremodal_cli.modal.leaks import leak_copies, under_residual
+from tiremodal_cli.modal.merge import COPY_MAX_AMPLITUDE, GroupMode, merge_groups, off_edges, swap_cost
 from tiremodal_cli.modal.misreads import without_misreads
 from tiremodal_cli.modal.options import ModalOptions
 from tiremodal_cli.modal.plscf import sweep_plscf
 from tiremodal_cli.modal.spatial import decompose, grid_points, leakage
 from tiremodal_cli.modal.stabilization import stabilize
+from tiremodal_cli.modal.symmetry import antisymmetric_share
 from tiremodal_cli.modal.table import table_from_result
 
 log = logging.getLogger(__name__)
@@ -120,7 +122,8 @@ class _Band:
 
 
 def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="accelerance",
-                    exp_tau_s=None, opt: ModalOptions = ModalOptions(), progress=None) -> ModalResult:
+                    exp_tau_s=None, opt: ModalOptions = ModalOptions(), progress=None,
+                    channel_angle=None) -> ModalResult:
     """Modal parameters of a set of FRFs.
 
     Parameters
@@ -128,7 +131,7 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     freq_hz : (n_freq,) array, Hz
     H : (n_channels, n_points, n_freq) complex array
     point_angle : (n_points,) array, rad, optional
-    channel_location : sequence of str, optional
+    channel_location : sequence of str, optional ; channel_angle : (n_channels,) rad, optional
     form : FRF form of H
     exp_tau_s : float, optional — exponential window to correct the damping for
     opt : ModalOptions
@@ -141,13 +144,16 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     opt.check()
     freq_hz = np.asarray(freq_hz, dtype=float)
     H = np.asarray(H)
-    band = _band_frfs(freq_hz, H, _live_channels(freq_hz, H), form, opt)
+    band = _band_frfs(freq_hz, H, live_channels(freq_hz, H), form, opt)
     spatial = opt.spatial == "on" or (opt.spatial == "auto" and point_angle is not None
                                       and is_circumferential(point_angle, channel_location))
     groups, group_max, opt = _order_groups(band, point_angle, spatial, opt)
     gaps = spatial and grid_points(point_angle) > len(point_angle)  # points missing: every order leaks
+    share = (antisymmetric_share(band.freq, band.Hb, point_angle, np.asarray(channel_angle)[band.live], exp_tau_s)
+             if spatial and not gaps and channel_angle is not None else None)  # modal.symmetry
     diagrams, modes, rejected, synth, kept = _modes_of_groups(band, groups, point_angle, spatial, gaps, group_max,
-                                                              opt, progress)
+                                                              opt, progress, share is not None
+                                                              and share < COPY_MAX_AMPLITUDE)
     if gaps:  # once more, each group read with the found modes' leaks taken out (modal.gaps)
         groups = cleaned_groups(band.freq, band.Hb, point_angle, [m.pole for m in modes],
                                 [set(m.order_energy) for m in modes])
@@ -164,13 +170,14 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     if opt.refine:  # the poles near the band's edges (docs/lsce.md, "Pole refinement")
         modes = refine_adopted(modes, {g: k for g, k in kept.items() if k is not None}, synth)
     meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
-            "max_order": int(group_max), "exp_tau_s": exp_tau_s}
+            "max_order": int(group_max), "exp_tau_s": exp_tau_s, "antisymmetric_share": share}
     return _result(band, H.shape, modes, synth, exp_tau_s, diagrams=diagrams, rejected=rejected + edge, meta=meta)
 
 
 def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool, group_max: int,
-                     opt: ModalOptions, progress):
-    """Every order group swept and fitted, and their modes merged into one per physical pole.
+                     opt: ModalOptions, progress, orthogonal: bool = False):
+    """Every order group swept and fitted, and their modes merged into one per physical pole
+    (``orthogonal``: a complete grid of a structure symmetric about its sensors, merge_groups).
 
     Returns (diagrams, modes (MergedMode), rejected, the physical synthesis (n_frf, K), each
     group's kept fit ({group: kept or None}, for the pole refinement))."""
@@ -192,27 +199,12 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
     if gaps:
         found, copies = leak_copies(found, leakage(point_angle))
         rejected += copies
-    modes = merge_groups(found, line_hz=band.freq[1] - band.freq[0], min_significance=opt.min_significance)
+    modes = merge_groups(found, line_hz=band.freq[1] - band.freq[0], min_significance=opt.min_significance,
+                         orthogonal=orthogonal)
     if not gaps:  # (with gaps: leak_copies only)
         modes, unseen = under_residual(modes, band.freq[1] - band.freq[0], band.Hb.shape[0], opt.min_significance)
         rejected += unseen
     return diagrams, modes, rejected, synth, kept
-
-
-def _live_channels(freq_hz, H) -> np.ndarray:
-    """(n_channels,) bool: the channels with FRFs (a dead one is NaN throughout, as ``tiremodal
-    frf`` marks it); NaN anywhere else is bad data."""
-    if H.ndim != 3 or H.shape[-1] != freq_hz.size:
-        raise DataFormatError(f"FRFs must be (n_channels, n_points, n_freq={freq_hz.size}); got {H.shape}")
-    live = ~np.array([np.all(np.isnan(H[c])) for c in range(H.shape[0])])
-    if not live.any():
-        raise DataFormatError("no channel has finite FRFs")
-    bad = ~np.isfinite(H[live])
-    if bad.any():
-        c, p, k = np.argwhere(bad)[0]
-        raise DataFormatError(f"FRF of channel {np.flatnonzero(live)[c] + 1}, point {p + 1} has a non-finite "
-                              f"value at {freq_hz[k]:g} Hz")
-    return live
 
 
 def _band_frfs(freq_hz, H, live, form: str, opt: ModalOptions) -> _Band:
@@ -375,7 +367,7 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
         return table, res
 
     res = estimate_modes(r.freq_hz, r.H, point_angle=r.point_angle, channel_location=r.channel_location,
-                         form=r.form, exp_tau_s=r.exp_tau_s, opt=opt, progress=progress)
+                         form=r.form, exp_tau_s=r.exp_tau_s, opt=opt, progress=progress, channel_angle=r.channel_angle)
     res.meta["band_reason"] = why
     res.meta["method"] = opt.method
     classes = None

@@ -1,0 +1,103 @@
+"""Two modes of different circumferential orders at one frequency, on a complete grid of
+points round a symmetric ring, are two modes (:func:`tiremodal_cli.modal.merge._both_located`).
+
+The FRFs are written here from the textbook roving-hammer model of an axisymmetric
+structure, not from the package's tyre models: a mode of order n seen by a sensor at
+angle θ_s has the residue φ_c cos n(θ_p − θ_s) at point p (the member of the degenerate
+pair with an antinode at the sensor; the other has a node there). The order groups of
+such a test are orthogonal, and a pole found in two of them is two modes.
+"""
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from tiremodal_cli.modal.lsfd import synthesize
+from tiremodal_cli.modal.merge import COPY_MAX_AMPLITUDE
+from tiremodal_cli.modal.modes import ModalOptions, estimate_modes
+from tiremodal_cli.modal.symmetry import antisymmetric_share, mirror_pairs
+
+N_POINTS = 24
+ZETA = 0.02
+#: (order, Hz): n = 3 and n = 7 lie 0.02 Hz apart, 0.003 of their half-power bandwidth
+#: (6 Hz) — under the estimator's bias floor, SAME_POLE_FLOOR_BW
+MODES = [(2, 100.0), (3, 150.0), (7, 150.02), (5, 210.0)]
+
+
+def _ring_frfs(seed: int, modes=MODES, sensor_deg: float = 0.0, split_deg: float | None = None):
+    """(freq, H (2 channels, N_POINTS, n_freq), angles) of ``modes`` [(order, Hz)]:
+    accelerance, a tread channel and a sidewall channel (half the tread's participation,
+    opposite in sign for the third mode) at ``sensor_deg``, white noise of 0.5 % of each
+    channel's RMS. ``split_deg``: each mode a pair split by a third of its half-power
+    bandwidth, its members' antinodes at ``split_deg`` and a quarter-wave from it (a lumped
+    mass there: the symmetry about the sensor broken)."""
+    rng = np.random.default_rng(seed)
+    theta = 2 * np.pi * np.arange(N_POINTS) / N_POINTS
+    ts = np.deg2rad(sensor_deg)
+    f = np.arange(0.0, 300.0, 0.25)
+    fn = np.array([m[1] for m in modes])
+    s = -ZETA * 2 * np.pi * fn + 1j * 2 * np.pi * fn * np.sqrt(1 - ZETA**2)
+    amp = np.array([1.0, 0.8, 1.0, 0.6])[:len(modes)]
+    side = np.array([0.5, 0.5, -0.5, 0.5])[:len(modes)]
+    H = np.zeros((2, N_POINTS, f.size), dtype=complex)
+    for c, part in enumerate((np.ones(len(modes)), side)):
+        if split_deg is None:
+            R = np.array([[a * p * np.cos(n * (th - ts)) for (n, _), a, p in zip(modes, amp, part)] for th in theta])
+            H[c] = synthesize(f, R * 1e-3, s, form="accelerance")
+            continue
+        tm = np.deg2rad(split_deg)  # member k: shape cos n(θ − θ_m − kπ/2n) at f (1 − kζ/3)
+        s2 = np.concatenate([s, s * (1 - ZETA / 3)])
+        R = np.array([[a * p * np.cos(n * (th - tm) - k * np.pi / 2) * np.cos(n * (ts - tm) - k * np.pi / 2)
+                       for k in (0, 1) for (n, _), a, p in zip(modes, amp, part)] for th in theta])
+        H[c] = synthesize(f, R * 1e-3, s2, form="accelerance")
+    rms = np.sqrt(np.mean(np.abs(H) ** 2, axis=(1, 2), keepdims=True))
+    H = H + 0.005 * rms / np.sqrt(2) * (rng.standard_normal(H.shape) + 1j * rng.standard_normal(H.shape))
+    return f, H, theta
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_two_orders_at_one_frequency_are_two_modes(seed):
+    """Both 150 Hz modes are reported, each in its own order group, within 0.1 % (until
+    session 16 the bias floor merged them into one mode of two groups)."""
+    f, H, theta = _ring_frfs(seed)
+    res = estimate_modes(f, H, point_angle=theta, channel_location=["tread", "sidewall"], channel_angle=[0.0, 0.0],
+                         form="accelerance", opt=ModalOptions(band_hz=(40.0, 280.0), max_order=30))
+    near = np.flatnonzero(np.abs(res.freq_hz - 150.0) < 1.5)
+    assert sorted(res.group[near].tolist()) == [3, 7], (res.freq_hz, res.group)
+    for k in near:
+        want = dict((n, fr) for n, fr in MODES)[int(res.group[k])]
+        assert_allclose(res.freq_hz[k], want, rtol=1e-3)
+    assert res.freq_hz.size == len(MODES), res.freq_hz
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_lone_mode_is_not_split_into_groups(seed):
+    """The orthogonality rule adds no mode where there is one: the same ring with only
+    n = 3 at 150 Hz gives one mode there (in group 3)."""
+    f, H, theta = _ring_frfs(seed, modes=[(2, 100.0), (3, 150.0), (5, 210.0)])
+    res = estimate_modes(f, H, point_angle=theta, channel_location=["tread", "sidewall"], channel_angle=[0.0, 0.0],
+                         form="accelerance", opt=ModalOptions(band_hz=(40.0, 280.0), max_order=30))
+    near = np.flatnonzero(np.abs(res.freq_hz - 150.0) < 1.5)
+    assert res.group[near].tolist() == [3], (res.freq_hz, res.group)
+
+
+def test_points_mirrored_about_a_sensor():
+    """24 points: a sensor on a point has 11 mirrored pairs (that point and the opposite one
+    have none), one midway between points has 12, one 7° off the grid none."""
+    theta = 2 * np.pi * np.arange(N_POINTS) / N_POINTS
+    assert len(mirror_pairs(theta, 0.0, 1e-6)) == 11
+    assert len(mirror_pairs(theta, np.pi / N_POINTS, 1e-6)) == 12
+    assert mirror_pairs(theta, np.deg2rad(7.0), 1e-6) == []
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_antisymmetric_share_sees_a_broken_symmetry_not_the_noise(seed):
+    """The symmetric ring's mirrored FRFs differ by their noise alone: share under a
+    hundredth. With each mode a pair split by a third of its bandwidth and oriented at 30°
+    (a mass there), the share is above the copy limit and the merge is left as it was."""
+    f, H, theta = _ring_frfs(seed)
+    sym = antisymmetric_share(f, H, theta, [0.0, 0.0])
+    assert sym is not None and sym < 0.01
+    f, H, theta = _ring_frfs(seed, split_deg=30.0)
+    assert antisymmetric_share(f, H, theta, [0.0, 0.0]) > COPY_MAX_AMPLITUDE
+    assert antisymmetric_share(f, H, theta, [np.deg2rad(7.0)] * 2) is None
