@@ -279,6 +279,10 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1285 / 1334 (96 %) | 9 | 12 / 1590 (0.8 %) | as above | 13 / 14 | 0 |
 | seeds + 2000, the ruler's alias-class rule | 76eda77 | paper | 1152 / 1212 (95 %) | 29 | 13 / 1426 (0.9 %) | as above | 12 / 13 | 0 |
 | | | ring | 1284 / 1334 (96 %) | 10 | 6 / 1582 (0.4 %) | as above | 12 / 14 | 0 |
+| seeds + 1000, session 16 (two orders at one frequency kept apart on a mirror-symmetric complete grid; alias-class ruler) | 5591f3a | paper | 1176 / 1212 (97 %) | 9 | 18 / 1623 (1.1 %) | 1: failed-points combination 11 / 69 | 13 / 13 | 0 |
+| | | ring | 1286 / 1334 (96 %) | 8 | 12 / 1823 (0.7 %) | 1: mass 4 / 65 | 13 / 14 (mass: air_cavity beside added_mass) | 0 |
+| seeds + 2000, session 16 | 5591f3a | paper | 1168 / 1212 (96 %) | 16 | 15 / 1625 (0.9 %) | **2**: failed-points combination 4 / 66, **added mass 3 / 50** (two rows of the mass-mixed crowd between truth modes: the mass sits at the sensor's angle, which the symmetry test cannot see) | 12 / 13 (failed-points combination: rhoA) | 0 |
+| | | ring | 1284 / 1334 (96 %) | 10 | 6 / 1798 (0.3 %) | 0 | **13 / 14** (the mass now right; 5,120 Hz Timoshenko + rim: m_w alone) | 0 |
 
 What does not hold on other seeds: (1) **the paper's failed-points combination** (2,560 Hz,
 24 points, one hit, 2 % noise, double hits and overloads: 5 points fail) — at seven seeds
