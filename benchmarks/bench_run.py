@@ -44,7 +44,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 BASELINE = "5c57b5d"
 #: the end of the previous session (its shell run is timed beside the present one)
-PREVIOUS = "ec5e4f1"
+PREVIOUS = "2ea4cf1"
 SAMPLE = ROOT / "sample_data" / "gl073a_sim.h5"
 TABLE_A1 = ROOT / "sample_data" / "paper_table_a1.csv"
 
