@@ -283,6 +283,8 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1286 / 1334 (96 %) | 8 | 12 / 1823 (0.7 %) | 1: mass 4 / 65 | 13 / 14 (mass: air_cavity beside added_mass) | 0 |
 | seeds + 2000, session 16 | 5591f3a | paper | 1168 / 1212 (96 %) | 16 | 15 / 1625 (0.9 %) | **2**: failed-points combination 4 / 66, **added mass 3 / 50** (two rows of the mass-mixed crowd between truth modes: the mass sits at the sensor's angle, which the symmetry test cannot see) | 12 / 13 (failed-points combination: rhoA) | 0 |
 | | | ring | 1284 / 1334 (96 %) | 10 | 6 / 1798 (0.3 %) | 0 | **13 / 14** (the mass now right; 5,120 Hz Timoshenko + rim: m_w alone) | 0 |
+| seeds + 3000, session 16 | 5591f3a | paper | 1174 / 1212 (97 %) | 8 | 27 / 1613 (1.7 %) | 2: added mass 6 / 55, failed-points combination 11 / 72 (the membrane 4 / 80, exactly at the bar: under it only because its table is one row longer; the same 27 spurious rows as 76eda77 case by case) | 12 / 13 (failed-points combination: rhoA) | 0 |
+| | | ring | 1290 / 1334 (97 %) | 9 | 9 / 1812 (0.5 %) | 0 | **13 / 14** (the mass now right; the sidewall coupling adopts nothing) | 0 |
 
 What does not hold on other seeds: (1) **the paper's failed-points combination** (2,560 Hz,
 24 points, one hit, 2 % noise, double hits and overloads: 5 points fail) — at seven seeds
