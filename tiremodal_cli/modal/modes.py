@@ -150,7 +150,7 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     groups, group_max, opt = _order_groups(band, point_angle, spatial, opt)
     gaps = spatial and grid_points(point_angle) > len(point_angle)  # points missing: every order leaks
     share = (antisymmetric_share(band.freq, band.Hb, point_angle, np.asarray(channel_angle)[band.live], exp_tau_s)
-             if spatial and not gaps and channel_angle is not None else None)  # modal.symmetry
+             if spatial and not gaps and channel_angle is not None and point_angle is not None else None)
     diagrams, modes, rejected, synth, kept = _modes_of_groups(band, groups, point_angle, spatial, gaps, group_max,
                                                               opt, progress, share is not None
                                                               and share < COPY_MAX_AMPLITUDE)
