@@ -259,3 +259,33 @@ def test_on_a_grid_with_failed_points_the_walk_alone_reads_the_aliases():
     res = classify(f, _shapes(th, modes), th, LOCS, significance=[0.9, 0.9, 0.9, 0.9, 0.9, 0.9, 0.8],
                    damping_ratio=[0.02] * 7)
     assert res[6].n_spatial == 4 and res[6].n == 8 and res[6].aliased
+
+
+@pytest.mark.parametrize("zeta", [0.01, 0.02])
+def test_an_alias_after_missed_orders_is_read_from_the_branch_step(zeta):
+    """On 34 points a rising branch (9.5 Hz per order, the ring's sidewall coupling at
+    400 Hz) is seen up to n = 31, then n = 32–34 are missed and n = 35, 36, 39 are seen: each
+    is read as the alias of its spatial order (1, 2, 5) that the branch's step puts at its
+    frequency — 35, 36, 39, not the smallest aliases above the mark (33, 32 → 36, 39). Where
+    the candidates' predicted frequencies lie within one bandwidth (a flat branch) the
+    smallest stays: the same branch flat (0.05 Hz per order) from n = 25 reads the n = 35 as 33."""
+    th = _grid(34)
+    orders = list(range(0, 32)) + [35, 36, 39]
+    f = [100.0 + 9.5 * n for n in orders]
+    S = _shapes(th, [(n, 0.7) for n in orders])
+    cls = classify(f, S, th, LOCS, significance=np.ones(len(f)), damping_ratio=np.full(len(f), zeta))
+    assert [c.n for c in cls[-3:]] == [35, 36, 39] and all(c.aliased for c in cls[-3:])
+    flat = [100.0 + 9.5 * n if n <= 25 else 337.5 + 0.05 * (n - 25) for n in orders]  # flat from n = 25
+    cls = classify(flat, S, th, LOCS, significance=np.ones(len(f)), damping_ratio=np.full(len(f), zeta))
+    assert cls[-3].n == 33
+
+
+def test_an_alias_beyond_three_grid_lengths_is_read():
+    """A clean rising branch seen far past its grid (12 points, n = 0 … 50: aliases up to
+    4 N + 2) reads every order."""
+    th = _grid(12)
+    orders = list(range(0, 51))
+    f = [100.0 + 9.5 * n for n in orders]
+    S = _shapes(th, [(n, 0.7) for n in orders])
+    cls = classify(f, S, th, LOCS, significance=np.ones(len(f)), damping_ratio=np.full(len(f), 0.01))
+    assert [c.n for c in cls] == orders

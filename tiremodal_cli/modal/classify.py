@@ -115,6 +115,7 @@ class _Modes:
     significance_group: np.ndarray | None
     free_rim: bool = False
     complete: bool = True  # every point of the grid measured (no failed points)
+    damping: np.ndarray | None = None  # damping ratios: a half-power bandwidth for the alias choice
 
     def clear(self, r: int) -> bool:
         """Both confidences ≥ 0.5 and (when known) significance ≥ 0.3."""
@@ -148,7 +149,8 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     reads = [_read(shapes[r], it, isw, point_angle) for r in range(len(freq_hz))]
     free_rim = _free_rim(shapes, locs)
     ns = _resolve_aliases(_Modes(freq_hz, reads, n_p, significance, significance_group, free_rim,
-                                 complete=n_p == len(point_angle)))
+                                 complete=n_p == len(point_angle),
+                                 damping=None if damping_ratio is None else np.asarray(damping_ratio, float)))
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
     reads = _partners_branches(freq_hz, reads, ns)
     reads = _other_branch(freq_hz, reads, ns, in_order, n_p)
@@ -239,7 +241,7 @@ def _walk_branch(m: _Modes, idx: list[int], ns: list[int], own: frozenset | set 
     """:func:`_resolve_aliases` along one branch's modes ``idx`` (by frequency), into ``ns``;
     the modes ``own`` keep their spatial order and do not move the mark (:func:`_contradicted`)."""
     f, reads, n_top = m.freq_hz, m.reads, max_order(m.n_points)
-    top = -1
+    top, marks = -1, []
     for i, r in enumerate(idx):
         n = reads[r].n_spatial
         if r in own:
@@ -261,7 +263,7 @@ def _walk_branch(m: _Modes, idx: list[int], ns: list[int], own: frozenset | set 
             far = 1 + sum(b - a > 0.05 * b for a, b in zip(lower, lower[1:])) >= 2 if lower else False
         if (n < top and top >= n_top - 1 and seen) or far:
             alias = _smallest_alias_from(reads[r].n_spatial, top, m.n_points)
-            n = n if alias is None else alias
+            n = n if alias is None else _by_dispersion(alias, reads[r].n_spatial, f[r], m, r, marks)
         ns[r] = n
         # a mode weak in the physical FRFs but clear in its own group (an order beside a
         # far stronger one of another order) continues the branch one order at a time
@@ -271,6 +273,29 @@ def _walk_branch(m: _Modes, idx: list[int], ns: list[int], own: frozenset | set 
                      and top < n <= top + 2)
         if m.clear(r) or weak_next:
             top = max(top, n)
+            marks.append((n, f[r]))
+
+
+def _by_dispersion(smallest: int, n_spatial: int, f_r: float, m: _Modes, r: int, marks: list) -> int:
+    """The alias order of the mode ``r`` at ``f_r`` Hz: the ``smallest`` alias at or above the
+    mark, unless the branch's last step continued (the last two marks' frequency per order)
+    puts another alias of its class nearer ``f_r`` and the two predictions lie more than the
+    mode's half-power bandwidth 2ζf apart — the dispersion tells them (a step of 9.5 Hz per
+    order on the ring's sidewall coupling: its n = 35 same at 418.2 Hz, 40 Hz above the n = 31,
+    was read as n = 33). Where the branch flattens (a crowd) the predictions lie within a
+    bandwidth and the smallest stays."""
+    if m.damping is None or len(marks) < 2 or marks[-1][0] <= marks[-2][0]:
+        return smallest
+    (n0, f0), (n1, f1) = marks[-2], marks[-1]
+    slope = (f1 - f0) / (n1 - n0)
+    if not slope > 0:
+        return smallest
+    n_p = m.n_points
+    cands = sorted({smallest} | {c for k in range(1, smallest // n_p + 3) for c in (k * n_p - n_spatial, k * n_p + n_spatial)
+                                 if c >= smallest})
+    pred = {c: f1 + slope * (c - n1) for c in cands}
+    best = min(cands, key=lambda c: abs(pred[c] - f_r))
+    return best if abs(pred[best] - pred[smallest]) > 2 * m.damping[r] * f_r else smallest
 
 
 def _smallest_alias_from(n_spatial: int, top: int, n_points: int) -> int | None:
