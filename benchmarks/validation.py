@@ -339,7 +339,7 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1301 / 1334 (98 %) | 7 / 1600 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-24, end of session 15 | the same code; the ruler finds an aliased order only by a row of its alias class (the paper's n = N same at 167.3 Hz had been credited to a crowd row of another group in 14 cases: found → mislabelled) | paper | 1162 / 1212 (96 %) | 7 / 1424 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 3.2 min |
 | | | ring | 1297 / 1334 (97 %) | 7 / 1600 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
-| 2026-11-24, end of session 16 | two orders at one frequency kept apart on a complete grid whose mirrored FRFs show a symmetric structure (the paper's n = N same found in every paper case; the ring's 0.05 noise case reads n = 11 as a crowd: −1); an n = 1 mode of a flat branch is no cavity evidence | paper | 1180 / 1212 (97 %) | 7 / 1627 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 3.1 min |
+| 2026-11-24, end of session 16 | two orders at one frequency kept apart on a complete grid whose mirrored FRFs show a symmetric structure (the paper's n = N same found in every paper case; the ring's 0.05 noise case reads n = 11 as a crowd: −1); an n = 1 mode of a flat branch is no cavity evidence; an alias after missed orders read from the branch's step (d5827f5: found and spurious as at 5591f3a) | paper | 1180 / 1212 (97 %) | 7 / 1627 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 3.2 min |
 | | | ring | 1296 / 1334 (97 %) | 7 / 1820 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
