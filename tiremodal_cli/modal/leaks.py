@@ -27,7 +27,7 @@ def under_residual(modes: list[MergedMode], line_hz: float, n_channels: int, min
     than one line ``line_hz`` over the model orders (the FRFs' resolution, as (c) of
     :func:`~tiremodal_cli.modal.groupfit.own_peaks`: the data do not locate it); (d) it lies
     within ζ_i f_i of a mode of another group with a larger peak (the candidate window of
-    :func:`merge_groups`); (e) it and the strongest of those, i, have one pattern at the
+    :func:`~tiremodal_cli.modal.merge.merge_groups`); (e) it and the strongest of those, i, have one pattern at the
     sensors, MAC ≥ ``min_mac`` (0.9, the stabilization's cluster MAC) of their channel
     vectors (:func:`channel_mac`: a roving-hammer residue is φ(c) ψ(p), one φ per physical
     mode in every group). Such a pole is fitted to i's leak into j's group (an added mass
@@ -90,7 +90,7 @@ def _leak_twins(kept: list, dropped: list, modes: list, line_hz: float, min_sign
     331.08 Hz, leaks at 332.77 Hz in group 9, MAC 0.97, dropped, and at 332.45 Hz in group 5,
     MAC 0.50, whose group accepts the 332.77 Hz pole: ΔE = −17.5; merged, the two shares'
     MPC would be 0.43). A kept mode m is that leak when (a) and (c) of :func:`under_residual`
-    hold for it and its group's swap test (:func:`swap_cost`, χ²(2)/2 quantile 1 − ``alpha``)
+    hold for it and its group's swap test (:func:`~tiremodal_cli.modal.merge.swap_cost`, χ²(2)/2 quantile 1 − ``alpha``)
     accepts a dropped leak's pole within m's half-power half-width.
     """
     if not dropped or not kept:

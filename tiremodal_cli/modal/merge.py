@@ -119,10 +119,10 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
     two modes of neighbouring orders (the opposite branch's n = 0 and 1 lie 0.15 % apart,
     a twentieth of a bandwidth) are rejected by their own data, however close; two weak
     poles pinned apart are two modes (:func:`_pinned_apart`; ``line_hz`` (Hz, 0: not
-    applied) and ``min_significance`` are its). On a complete grid (``orthogonal``) two
-    poles each located by their own group's data are two modes however close
-    (:func:`_both_located`). The merged mode's shape is the sum of the groups' shares, its
-    pole the dominant group's.
+    applied) and ``min_significance`` are its). With ``orthogonal`` (a complete grid whose
+    FRFs show a symmetric structure, :mod:`~tiremodal_cli.modal.symmetry`) two poles each
+    located by their own group's data are two modes however close (:func:`_both_located`).
+    The merged mode's shape is the sum of the groups' shares, its pole the dominant group's.
 
     Returns
     -------
