@@ -245,3 +245,27 @@ def test_uff_export_names_a_dead_channel(tmp_path, exact_sim, caplog):
     sets = [s for s in pyuff.UFF(str(tmp_path / "f.uff")).read_sets() if s["type"] == 58]
     assert {s["rsp_ent_name"].strip() for s in sets} == {"tread", "sidewall"}
     assert all(s["id4"] == "tyre A" for s in sets)
+
+
+def test_force_autospectrum_is_the_half_sine_pulse_spectrum(tmp_path):
+    """A half-sine pulse of A = 150 N and w = 2 ms sampled at 10 kHz: the FRF stage's force
+    autospectrum is |fs · F(ω)|² with the pulse's Fourier transform written out here,
+    |F(ω)| = 2 A π w |cos(ωw/2)| / |π² − ω²w²| (to 1 % below half its first zero at 1.5 / w,
+    where the sampled pulse's aliasing is negligible); it survives the FRF file."""
+    fs, n, w, amp = 10_000.0, 4096, 2e-3, 150.0
+    t = np.arange(n) / fs - 0.01
+    pulse = np.where((t >= 0) & (t <= w), amp * np.sin(np.pi * np.clip(t, 0, w) / w), 0.0)
+    rng = np.random.default_rng(3)
+    force = np.stack([pulse, pulse])[None]  # (1 point, 2 hits, n)
+    resp = np.stack([np.convolve(pulse, rng.standard_normal(64) * np.exp(-np.arange(64) / 8))[:n]] * 2)[None, :, None]
+    m = Measurement(force=force, response=resp, sample_rate=fs, point_angle=np.zeros(1),
+                    channel_name=("c0",), channel_location=("tread",), channel_angle=np.zeros(1))
+    r = compute_frf(m, FRFOptions(band_hz=(0.0, 2000.0)))
+    om = 2 * np.pi * r.freq_hz
+    want = (fs * 2 * amp * np.pi * w * np.abs(np.cos(om * w / 2)) / np.abs(np.pi**2 - (om * w) ** 2)) ** 2
+    sel = (r.freq_hz > 0) & (r.freq_hz < 0.75 / w)
+    assert r.force_autospectrum.shape == (1, r.freq_hz.size)
+    assert_allclose(r.force_autospectrum[0, sel], want[sel], rtol=0.01)
+    from tiremodal_cli.io.frffile import write_frf
+    back = read_frf(write_frf(tmp_path / "f.h5", r))
+    assert_allclose(back.force_autospectrum, r.force_autospectrum, rtol=0, atol=0)

@@ -434,3 +434,23 @@ def test_poly_reference_orders_in_threads_give_the_same_poles_and_table(exact_si
     t2, _ = modal_table_from_frf(frf, ModalOptions(workers=2))
     np.testing.assert_array_equal(t1.frequency_hz, t2.frequency_hz)
     np.testing.assert_array_equal(t1.damping_ratio, t2.damping_ratio)
+
+
+def test_lsce_on_an_frf_file_of_one_hit_per_point_bands_by_the_force(tmp_path):
+    """One hit per point: the coherence is 1 by construction and says nothing, so the band
+    ends where the hammer's spectrum has fallen (before its first zero at 1.5 / pulse
+    width, 1,500 Hz for a 1 ms pulse) — for ``lsce`` on the FRF file as for ``run``, which
+    has the records (until session 18 the file did not carry the force spectrum and
+    ``lsce`` took every line up to the FRFs' top, 0.3125 fs = 1,600 Hz)."""
+    from tiremodal_cli.io.frffile import write_frf
+    from tiremodal_cli.io.modalfile import read_modal
+    s = simulate(SimulationConfig(n_points=24, n_hits=1, sample_rate=5120.0, n_samples=4096, noise=0.01, seed=2,
+                                  pulse_width_s=0.001, params=TyreParameters(m_w=1000.0)))
+    r = compute_frf(s.measurement, FRFOptions(band_hz=(0.0, 0.3125 * 5120.0), exp_end=0.05))
+    frf = write_frf(tmp_path / "frf.h5", r)
+    res = run_cli(["lsce", frf, "-o", tmp_path / "modal.h5"])
+    assert res.exit_code == 0, res.output
+    meta = read_modal(tmp_path / "modal.h5").meta
+    lo, hi = meta["band_hz"]
+    assert hi < 1.5 / 0.001 and "force autospectrum" in meta["band_reason"], meta
+    assert lo < min(m["frequency_hz"] for m in s.truth["modes"] if m["n"] == 1 and m["branch"] == "same")

@@ -97,6 +97,9 @@ class FRFResult:
     exp_tau_s : float or None                                exponential window, s
     sample_rate : float, Hz ; n_samples : int                of the records
     meta : dict                                              windows and provenance
+    force_autospectrum : (n_points, n_freq) ndarray or None  mean |F|² over each point's
+        accepted hits on the FRF lines (the DFT of the windowed force record, N²: the
+        denominator of H1 over the hits); None when not known (FRFs read from UFF 58)
     """
 
     freq_hz: np.ndarray
@@ -116,6 +119,7 @@ class FRFResult:
     sample_rate: float
     n_samples: int
     meta: dict = field(default_factory=dict)
+    force_autospectrum: np.ndarray | None = None
 
 
 def estimate(F, Y, *, estimator: str = "H1", axis: int = 0):
@@ -233,6 +237,7 @@ class _Averages:
     peaks: np.ndarray        # (n_points, n_hits, n_channels) record peaks
     rejections: list
     not_run: list
+    gff: np.ndarray          # (n_points, n_band) mean |F|² over the accepted hits
 
 
 def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResult:
@@ -263,6 +268,7 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
     nf = plan.hi - plan.lo + 1
     H = np.full((n_c, n_p, nf), np.nan + 0j)
     coh = np.full((n_c, n_p, nf), np.nan)
+    gff = np.zeros((n_p, nf))
     n_avg = np.zeros(n_p, dtype=int)
     rejections, peaks = [], np.zeros((n_p, m.n_hits, n_c))
     bounce, not_run = test_wide_checks(m, plan.fs, opt)
@@ -271,9 +277,10 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
         rejections += rej
         if sums is not None:
             H[:, ip], coh[:, ip] = _from_products(*sums, opt.estimator)
+            gff[ip] = sums[1][0] / n_avg[ip]
         if progress:
             progress(ip + 1, n_p)
-    return _result(m, plan, opt, _Averages(H, coh, n_avg, peaks, rejections, not_run))
+    return _result(m, plan, opt, _Averages(H, coh, n_avg, peaks, rejections, not_run, gff))
 
 
 def _plan(m, opt: FRFOptions) -> _Plan:
@@ -361,6 +368,7 @@ def _result(m, plan: _Plan, opt: FRFOptions, avg: _Averages) -> FRFResult:
     if not keep_p.all():  # (copies of H and coh only when a point is left out: 15 % of the stage)
         H, coh = H[:, keep_p], coh[:, keep_p]
     lines, Hf = convert_form(plan.freq[plan.sel], H, opt.form)
+    gff = avg.gff[keep_p][:, lines]
     if not lines.all():
         coh = coh[..., lines]
     rejections.sort(key=lambda r: (r.point if r.point is not None else -1, r.hit if r.hit is not None else -1))
@@ -369,7 +377,8 @@ def _result(m, plan: _Plan, opt: FRFOptions, avg: _Averages) -> FRFResult:
                      channel_name=names, channel_location=tuple(m.channel_location),
                      channel_angle=np.asarray(m.channel_angle), rejections=tuple(rejections),
                      dead_channels=dead_ch, estimator=opt.estimator, form=opt.form, exp_tau_s=plan.tau,
-                     sample_rate=plan.fs, n_samples=plan.ns, meta=_meta(opt, plan, failed, avg.not_run))
+                     sample_rate=plan.fs, n_samples=plan.ns, meta=_meta(opt, plan, failed, avg.not_run),
+                     force_autospectrum=gff)
 
 
 def _meta(opt: FRFOptions, plan: _Plan, failed, not_run) -> dict:

@@ -10,7 +10,10 @@ exponential window), ``tiremodal_version``, ``input_file``, ``input_sha256``, ``
 ``dead_channels`` (str), ``channel_live`` (n_channels,) bool: false for a dead channel, whose
 entries in ``frf`` and ``coherence`` hold the fill value 0 — both datasets say so in their
 attributes ``null_fill``, ``null_where``, ``null_reason`` (no NaN is stored; :func:`read_frf`
-gives NaN there in memory, as the estimate has it).
+gives NaN there in memory, as the estimate has it); ``force_autospectrum`` (n_points, n_freq)
+float64, N², optional (absent in files written before session 18 and for FRFs given as UFF 58):
+the mean |F|² over each point's accepted hits — what lets ``lsce`` on the file choose the
+band ``run`` chose.
 """
 
 from __future__ import annotations
@@ -83,6 +86,11 @@ def write_frf(path, r: FRFResult, *, input_file: str = "", input_sha256: str = "
             h.create_dataset("channel_location", data=list(r.channel_location), dtype=s)
             h.create_dataset("channel_angle", data=r.channel_angle)
             h.create_dataset("dead_channels", data=list(r.dead_channels), dtype=s)
+            if r.force_autospectrum is not None:
+                h.create_dataset("force_autospectrum", data=np.asarray(r.force_autospectrum, dtype=np.float64))
+                h["force_autospectrum"].attrs["units"] = "N^2"
+                h["force_autospectrum"].attrs["meaning"] = ("mean |F|^2 over each point's accepted hits on the FRF "
+                                                            "lines (DFT of the windowed force record)")
     return Path(path)
 
 
@@ -134,6 +142,7 @@ def read_frf(path) -> FRFResult:
             d = {k: h[k][()] for k in need if k not in ("channel_name", "channel_location", "dead_channels")}
             names, locs, dead = (read_strings(h[k]) for k in ("channel_name", "channel_location", "dead_channels"))
             live = h["channel_live"][()].astype(bool) if "channel_live" in h else None
+            gff = np.asarray(h["force_autospectrum"][()], dtype=float) if "force_autospectrum" in h else None
             a = dict(h.attrs)
         except (OSError, ValueError, TypeError) as exc:
             raise DataFormatError(f"{where}: cannot read ({exc}); the file may be truncated") from None
@@ -143,6 +152,7 @@ def read_frf(path) -> FRFResult:
             or len(names) != n_c or d["point_angle"].shape != (n_p,):
         raise DataFormatError(f"{where}: sizes do not match (frf {H.shape}, freq_hz {d['freq_hz'].shape}, "
                               f"{len(names)} channels, {d['point_angle'].shape[0]} points)")
+    _check_force(gff, where, n_p, n_f)
     if live is not None:  # the dead channels' fill value back to NaN in memory (older files stored NaN)
         if live.shape != (n_c,):
             raise DataFormatError(f"{where}: channel_live has {live.size} entries for {n_c} channels")
@@ -157,7 +167,14 @@ def read_frf(path) -> FRFResult:
                      dead_channels=dead, estimator=_s(a.get("estimator", "H1")),
                      form=_s(a.get("form", "accelerance")), exp_tau_s=None if tau is None else float(tau),
                      sample_rate=float(a.get("sample_rate", np.nan)), n_samples=int(a.get("n_samples", 0)),
-                     meta=json.loads(_s(a.get("meta", "{}"))))
+                     meta=json.loads(_s(a.get("meta", "{}"))), force_autospectrum=gff)
+
+
+def _check_force(gff, where, n_p, n_f):
+    """The optional force autospectrum: (n_points, n_freq), finite and ≥ 0, or DataFormatError."""
+    if gff is not None and (gff.shape != (n_p, n_f) or not np.all(np.isfinite(gff)) or np.any(gff < 0)):
+        raise DataFormatError(f"{where}: force_autospectrum must be ({n_p}, {n_f}) finite values ≥ 0; "
+                              f"got shape {gff.shape}")
 
 
 def _s(v):

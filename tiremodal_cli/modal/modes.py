@@ -342,8 +342,10 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
     """The whole modal stage on an FRFResult: modes, and the tyre classification when the
     points go round a tread.
 
-    Without ``opt.band_hz`` the band is :func:`default_band` of the FRFs' coherence (and
-    ``force_autospectrum``, (n_freq,) on ``r.freq_hz``); its reason in ``meta["band_reason"]``.
+    Without ``opt.band_hz`` the band is :func:`default_band` of the FRFs' coherence and the
+    force autospectrum (``force_autospectrum``, (n_freq,) on ``r.freq_hz``; by default the
+    mean over the points of ``r.force_autospectrum`` when the FRFs carry it — so ``lsce`` on
+    an FRF file chooses the band ``run`` chose); its reason in ``meta["band_reason"]``.
 
     Returns
     -------
@@ -354,6 +356,8 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
         return stored_order(modal_table_from_frf(frf_points_taken(r, order), opt, progress=progress,
                                                  force_autospectrum=force_autospectrum), order)
     if opt.band_hz is None:
+        if force_autospectrum is None and r.force_autospectrum is not None:
+            force_autospectrum = np.mean(r.force_autospectrum, axis=0)
         band, why = default_band(r.freq_hz, r.coherence, r.n_averages, force_autospectrum)
         opt = replace(opt, band_hz=band)
     else:

@@ -30,7 +30,8 @@ def angle_order(point_angle) -> np.ndarray | None:
 def frf_points_taken(r, idx):
     """The FRFResult ``r`` with its points taken in the order ``idx``."""
     return dataclasses.replace(r, H=r.H[:, idx], coherence=r.coherence[:, idx], n_averages=r.n_averages[idx],
-                               point_index=r.point_index[idx], point_angle=r.point_angle[idx])
+                               point_index=r.point_index[idx], point_angle=r.point_angle[idx],
+                               force_autospectrum=None if r.force_autospectrum is None else r.force_autospectrum[idx])
 
 
 def result_points_taken(res, idx):

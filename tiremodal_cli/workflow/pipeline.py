@@ -15,7 +15,6 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
-import scipy.fft
 from threadpoolctl import threadpool_info
 
 from tiremodal_cli.diagnose.loop import DiagnoseOptions, base_fit, diagnose, report, usable_modes
@@ -106,7 +105,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     say = progress or (lambda stage: None)
     if len(paths) == 1 and is_modes_table(paths[0]):
         return _run_on_modes(paths[0], outdir, opt, params or TyreParameters(), source, say, t0)
-    r, force_g, meta, sha = _frf_input(paths, opt, mapping, say)
+    r, meta, sha = _frf_input(paths, opt, mapping, say)
     nominal = params or TyreParameters()
     params = nominal
     if opt.pressure_from_file and meta["inflation_pressure"] is not None and float(meta["inflation_pressure"]) > 0:
@@ -117,7 +116,7 @@ def run(measurement, outdir, opt: RunOptions = RunOptions(), *, params: TyrePara
     write_frf(outdir / "frf.h5", r, input_file=str(source["path"]), input_sha256=sha, overwrite=True)
     say("lsce")
     try:
-        table = _modal_stage(r, force_g, opt, outdir)
+        table = _modal_stage(r, opt, outdir)
     except DataFormatError as exc:  # (no stable mode: say which test)
         raise DataFormatError(f"{source['path']}: {exc}") from None
     ident, rep = _model_stages(table, params, rim_how, opt, source, outdir, say)
@@ -224,16 +223,17 @@ def model_inputs(table, params: TyreParameters, rim_how: str, opt: RunOptions, s
 
 def _frf_input(paths, opt: RunOptions, mapping, say):
     """The test's FRFs: read from UFF 58 files, or estimated from the measurement file.
-    Returns (FRFResult, force autospectrum or None, the test's facts, input checksum)."""
+    Returns (FRFResult, the test's facts, input checksum); the FRFs estimated here carry the
+    force autospectrum (the default band's evidence), UFF ones do not."""
     if all(is_uff(p) for p in paths):
         say("read FRFs")
         r, meta = read_uff_test(paths, mapping)
-        return r, None, meta, sha256_file(paths[0]) if len(paths) == 1 else files_sha256(paths)
+        return r, meta, sha256_file(paths[0]) if len(paths) == 1 else files_sha256(paths)
     if len(paths) != 1:
         raise ParameterError("run takes one measurement file, or UFF files of FRFs")
     say("frf")
-    r, force_g, meta = _frf_stage(paths[0], opt)
-    return r, force_g, meta, sha256_file(paths[0])
+    r, meta = _frf_stage(paths[0], opt)
+    return r, meta, sha256_file(paths[0])
 
 
 def thread_budget() -> int:
@@ -243,12 +243,12 @@ def thread_budget() -> int:
     return max(1, min(n)) if n else 1
 
 
-def _modal_stage(r, force_g, opt: RunOptions, outdir: Path):
+def _modal_stage(r, opt: RunOptions, outdir: Path):
     """The modal table of the FRFs, written as modal.h5 and modes.csv (the poly-reference
     sweeps' model orders solved in :func:`thread_budget` threads: the same poles)."""
     mopt = ModalOptions(band_hz=None if opt.band is None else tuple(opt.band), workers=thread_budget(),
                         order_within_band=True)  # (run has no order option: short records lower it)
-    table, _ = modal_table_from_frf(r, mopt, force_autospectrum=force_g)
+    table, _ = modal_table_from_frf(r, mopt)
     write_modal(outdir / "modal.h5", table, input_file="frf.h5",
                 input_sha256=sha256_file(outdir / "frf.h5"), overwrite=True)
     write_text_atomic(outdir / "modes.csv", to_csv(table), overwrite=True)
@@ -287,21 +287,8 @@ def _model_summary(ident: dict, rep: dict) -> dict:
             "unexplained_modes": rep["unexplained_modes"], "verdict": rep["verdict"]}
 
 
-def _force_autospectrum(m, freq_hz):
-    """Mean |F|² of every hit's force record on the FRF lines ``freq_hz`` (one point at a
-    time: memory of one point's records)."""
-    fs, ns = float(m.sample_rate), int(m.n_samples)
-    k = np.round(np.asarray(freq_hz) * ns / fs).astype(int)
-    acc = np.zeros(k.size)
-    for ip in range(m.n_points):
-        f = np.asarray(m.force[ip], dtype=float)
-        f = np.where(np.isfinite(f), f, 0.0)
-        acc += np.sum(np.abs(scipy.fft.rfft(f, axis=-1)[..., k]) ** 2, axis=0)
-    return acc
-
-
 def _frf_stage(measurement: Path, opt: RunOptions):
-    """The FRF stage of a measurement file: FRFs, the force autospectrum, the test's facts."""
+    """The FRF stage of a measurement file: FRFs (with the force autospectrum), the test's facts."""
     with open_measurement(measurement) as m:
         fs = float(m.sample_rate)
         if opt.band is not None and not opt.band[1] <= opt.frf_top * fs:
@@ -313,10 +300,9 @@ def _frf_stage(measurement: Path, opt: RunOptions):
             raise DataFormatError(f"{measurement}: cannot read the records ({exc}); the file may be truncated") from None
         except DataFormatError as exc:  # (every hit rejected: say which test)
             raise DataFormatError(f"{measurement}: {exc}") from None
-        force_g = _force_autospectrum(m, r.freq_hz)
         meta = {"tire": getattr(m, "tire", None), "inflation_pressure": getattr(m, "inflation_pressure", None),
                 "n_points": int(m.n_points), "n_hits": int(m.n_hits), "sample_rate": fs}
-    return r, force_g, meta
+    return r, meta
 
 
 def read_uff_test(paths, mapping=None):
