@@ -76,6 +76,11 @@ def fx(tmp_path_factory):
                 data = h[k][..., :n]
                 del h[k]
                 h.create_dataset(k, data=data)
+    shutil.copy(d / "f.h5", d / "f_force.h5")  # a force autospectrum of the wrong shape, one value < 0
+    with h5py.File(d / "f_force.h5", "r+") as h:
+        g = h["force_autospectrum"][()]
+        del h["force_autospectrum"]
+        h.create_dataset("force_autospectrum", data=-g[:, :-1])
     (d / "c_type.toml").write_text('n_points = "many"\n')
     (d / "c_float.toml").write_text("n_hits = 2.5\n")
     (d / "c_bool.toml").write_text("sample_rate = true\n")
@@ -214,6 +219,7 @@ CASES = [
     ("lsce-band-inverted", ["lsce", "{f.h5}", "-o", "{out}", "--band", "300", "100"], ["--band"]),
     ("lsce-not-frf", ["lsce", "{m.h5}", "-o", "{out}"], ["m.h5"]),
     ("lsce-garbage", ["lsce", "{garbage.h5}", "-o", "{out}"], ["garbage.h5"]),
+    ("lsce-force-spectrum", ["lsce", "{f_force.h5}", "-o", "{out}"], ["f_force.h5", "force_autospectrum", "≥ 0"]),
     ("lsce-max-order", ["lsce", "{f.h5}", "-o", "{out}", "--max-order", "100000"], ["--max-order"]),
     # ---- mac, predict, sensitivity, ingest
     ("mac-not-modal", ["mac", "{f.h5}"], ["f.h5"]),

@@ -192,4 +192,4 @@ def describe_frf(path: str | os.PathLike) -> dict:
             "resolution_hz": float(r.freq_hz[1] - r.freq_hz[0]) if r.freq_hz.size > 1 else None,
             "channels": list(r.channel_name), "dead_channels": list(r.dead_channels),
             "n_averages_min": int(r.n_averages.min()), "n_rejections": len(r.rejections),
-            "exp_tau_s": r.exp_tau_s, **src}
+            "exp_tau_s": r.exp_tau_s, "force_autospectrum": r.force_autospectrum is not None, **src}
