@@ -285,6 +285,12 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1284 / 1334 (96 %) | 10 | 6 / 1798 (0.3 %) | 0 | **13 / 14** (the mass now right; 5,120 Hz Timoshenko + rim: m_w alone) | 0 |
 | seeds + 3000, session 16 | 5591f3a | paper | 1174 / 1212 (97 %) | 8 | 27 / 1613 (1.7 %) | 2: added mass 6 / 55, failed-points combination 11 / 72 (the membrane 4 / 80, exactly at the bar: under it only because its table is one row longer; the same 27 spurious rows as 76eda77 case by case) | 12 / 13 (failed-points combination: rhoA) | 0 |
 | | | ring | 1290 / 1334 (97 %) | 9 | 9 / 1812 (0.5 %) | 0 | **13 / 14** (the mass now right; the sidewall coupling adopts nothing) | 0 |
+| seeds + 1000, session 18 (run's band from the force autospectrum of the accepted hits) | c2f85df | paper | 1176 / 1212 (97 %) | 9 | 18 / 1623 (1.1 %) | 1: failed-points combination 11 / 69 | 13 / 13 | 0 |
+| | | ring | 1286 / 1334 (96 %) | 8 | 12 / 1824 (0.7 %) | 1: mass 4 / 65 | 13 / 14 (mass: air_cavity beside added_mass) | 0 |
+| seeds + 2000, session 18 | c2f85df | paper | 1168 / 1212 (96 %) | 16 | 15 / 1625 (0.9 %) | 2: failed-points combination 4 / 66, added mass 3 / 50 | 12 / 13 (failed-points combination: rhoA) | 0 |
+| | | ring | 1284 / 1334 (96 %) | 10 | 6 / 1800 (0.3 %) | 0 | **14 / 14** (the 5,120 Hz Timoshenko + rim now right: its band's top 4 Hz higher without the rejected hits) | 0 |
+| seeds + 3000, session 18 | c2f85df | paper | 1174 / 1212 (97 %) | 8 | 27 / 1613 (1.7 %) | 2: added mass 6 / 55, failed-points combination 11 / 72 | 12 / 13 (failed-points combination: rhoA) | 0 |
+| | | ring | 1290 / 1334 (97 %) | 9 | 8 / 1812 (0.4 %) | 0 | 13 / 14 (the sidewall coupling adopts nothing) | 0 |
 
 What does not hold on other seeds: (1) **the paper's failed-points combination** (2,560 Hz,
 24 points, one hit, 2 % noise, double hits and overloads: 5 points fail) — at seven seeds
@@ -300,6 +306,15 @@ row read at spatial order 1 in the cavity band, its coupling γ insignificant (|
 (4) since session 15, **the paper membrane's weak same-direction modes**, now found where
 their best channel shows them, are at times estimated 0.3–0.6 % off (crowded neighbours): at
 + 3000 the membrane goes over the bar, 4 of 79.
+
+What the held-out spurious rows are (session 18, `benchmarks/spurious.py` on the kept runs at
+c2f85df; classes by the distance to the nearest truth mode in its half-power half-widths): at
++ 1000, 19 biased (within half a half-width of a truth mode no other row reports, but over
+0.3 % off), 4 copies, 7 between truth modes, none far; at + 2000, 13, 5, 1 and 2 far; at + 3000,
+19, 10, 6, none far. Most are real modes estimated 0.3–1 % off (at ζ ≈ 3–4 %, a tenth of a
+half-width), which the ruler counts twice — missed and spurious; the poles with no mode under
+them are the failed-points combination's three below the band's top at + 1000 (between) and two
+far rows at + 2000.
 """
 
 
@@ -341,6 +356,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1297 / 1334 (97 %) | 7 / 1600 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-24, end of session 16 | two orders at one frequency kept apart on a complete grid whose mirrored FRFs show a symmetric structure (the paper's n = N same found in every paper case; the ring's 0.05 noise case reads n = 11 as a crowd: −1); an n = 1 mode of a flat branch is no cavity evidence; an alias after missed orders read from the branch's step (d5827f5: found and spurious as at 5591f3a) | paper | 1180 / 1212 (97 %) | 7 / 1627 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 3.2 min |
 | | | ring | 1296 / 1334 (97 %) | 7 / 1820 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-25, end of session 18 | the force autospectrum of each point's accepted hits kept in the FRFs and frf.h5; run's band from it (before: every record, rejected hits too, read a second time), as lsce's on the file (c2f85df; two 5,120 Hz ring combinations' band tops 4–10 Hz higher) | paper | 1180 / 1212 (97 %) | 7 / 1627 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 3.5 min |
+| | | ring | 1296 / 1334 (97 %) | 8 / 1821 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
