@@ -312,9 +312,11 @@ c2f85df; classes by the distance to the nearest truth mode in its half-power hal
 + 1000, 19 biased (within half a half-width of a truth mode no other row reports, but over
 0.3 % off), 4 copies, 7 between truth modes, none far; at + 2000, 13, 5, 1 and 2 far; at + 3000,
 19, 10, 6, none far. Most are real modes estimated 0.3–1 % off (at ζ ≈ 3–4 %, a tenth of a
-half-width), which the ruler counts twice — missed and spurious; the poles with no mode under
-them are the failed-points combination's three below the band's top at + 1000 (between) and two
-far rows at + 2000.
+half-width), which the ruler counts twice — missed and spurious. The rest (7, 3 and 6) lie
+between truth modes or far from them: the paper's failed-points combination's three poles under
+the band's top (972–988 Hz, + 1000), the ring's 1,024 Hz failed-points combination's two rows at
+34 and 49 Hz (+ 2000), the paper's added mass's three rows between the crowd and its n = 0
+(178–182 Hz, + 3000), and single rows of the ring's noise, mass and 5,120 Hz cases.
 """
 
 
