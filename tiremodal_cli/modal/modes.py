@@ -338,14 +338,14 @@ def confirmed(a: "ModalResult", b: "ModalResult") -> np.ndarray:
     return out
 
 
-def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None, force_autospectrum=None):
+def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None):
     """The whole modal stage on an FRFResult: modes, and the tyre classification when the
     points go round a tread.
 
-    Without ``opt.band_hz`` the band is :func:`default_band` of the FRFs' coherence and the
-    force autospectrum (``force_autospectrum``, (n_freq,) on ``r.freq_hz``; by default the
-    mean over the points of ``r.force_autospectrum`` when the FRFs carry it — so ``lsce`` on
-    an FRF file chooses the band ``run`` chose); its reason in ``meta["band_reason"]``.
+    Without ``opt.band_hz`` the band is :func:`default_band` of the FRFs' coherence and, when
+    the FRFs carry it, the mean over the points of their force autospectrum
+    (``r.force_autospectrum``: ``lsce`` on an FRF file chooses the band ``run`` chose); its
+    reason in ``meta["band_reason"]``.
 
     Returns
     -------
@@ -353,12 +353,10 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
     """
     order = angle_order(r.point_angle)
     if order is not None:  # every estimate in the order of the angles (point_order): the same however stored
-        return stored_order(modal_table_from_frf(frf_points_taken(r, order), opt, progress=progress,
-                                                 force_autospectrum=force_autospectrum), order)
+        return stored_order(modal_table_from_frf(frf_points_taken(r, order), opt, progress=progress), order)
     if opt.band_hz is None:
-        if force_autospectrum is None and r.force_autospectrum is not None:
-            force_autospectrum = np.mean(r.force_autospectrum, axis=0)
-        band, why = default_band(r.freq_hz, r.coherence, r.n_averages, force_autospectrum)
+        g = None if r.force_autospectrum is None else np.mean(r.force_autospectrum, axis=0)
+        band, why = default_band(r.freq_hz, r.coherence, r.n_averages, g)
         opt = replace(opt, band_hz=band)
     else:
         why = "given"
