@@ -244,6 +244,20 @@ the ring's 33 (28 + 5), 6 beyond (sidewall coupling's n = 47, 60; with the mass 
 the mass's opposite n = 0) and 27 within — most of them the sidewall coupling + mass's weak
 same-direction modes, whose shapes the mass mixes (purity 0.4–1.0), so the one-order bound is
 optimistic there. 18 modes were found although beyond (17 of them the ring's).
+Session 19 added a third model, **poly-reference** (`benchmarks/crlb_polyref.py`, `sigma_r`):
+each mode's residues rank one — one participation vector over the channels, as the
+estimator's order groups assume, shared by tread and sidewall — with the shape free on the
+points' circumferential harmonics that show above the noise (so a shape the mass mixes is
+bounded as mixed, not as one order); checked by two seeded Monte-Carlo maximum-likelihood
+fits (`tests/test_crlb_polyref.py`: the spread within 15 % of the bound) and by the limits
+that orders are told apart by the points and aliases are not. On the session-18 run
+(8c046bd, `--misses-only`): of the paper's 32 expected modes not found, 6 are beyond 3 σ_f >
+0.3 % under it (one-order model: 10); of the ring's 38, 6 (one-order: 6) — the rest, 58 of 70,
+are within reach of an efficient estimator: the ring's sidewall coupling's same n = 59, 61,
+64 (0.03–0.04 %, rejected by the pin rule: their poles scatter 1.0–1.1 Hz over the model
+orders, more than a line, beside a stronger mode's overlapping band), the membrane's same
+n = 45–56 (0.02–0.11 %) and the mixed same-direction modes of the sidewall coupling + mass
+(0.01–0.08 % but n = 41, 58, 62: 0.26–0.53 %).
 
 Reproduce: `python benchmarks/validation.py` (about {minutes:.0f} minutes with {jobs} workers on
 the machine below). The test suite runs a seeded subset (`tests/test_validation.py`).
