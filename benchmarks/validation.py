@@ -252,12 +252,16 @@ bounded as mixed, not as one order); checked by two seeded Monte-Carlo maximum-l
 fits (`tests/test_crlb_polyref.py`: the spread within 15 % of the bound) and by the limits
 that orders are told apart by the points and aliases are not. On the session-18 run
 (8c046bd, `--misses-only`): of the paper's 32 expected modes not found, 6 are beyond 3 σ_f >
-0.3 % under it (one-order model: 10); of the ring's 38, 6 (one-order: 6) — the rest, 58 of 70,
-are within reach of an efficient estimator: the ring's sidewall coupling's same n = 59, 61,
-64 (0.03–0.04 %, rejected by the pin rule: their poles scatter 1.0–1.1 Hz over the model
-orders, more than a line, beside a stronger mode's overlapping band), the membrane's same
-n = 45–56 (0.02–0.11 %) and the mixed same-direction modes of the sidewall coupling + mass
-(0.01–0.08 % but n = 41, 58, 62: 0.26–0.53 %).
+0.3 % under it (one-order model: 10: the membrane cases' same n = 54, 55 and the membrane +
+cavity's n = 46, σ_f 0.10–0.11 %, and the added mass's mixed n = 2 opposite, 0.27 %); of the
+ring's 38, 6 (one-order: 6: the mass's n = 0 opposite, and the sidewall coupling + mass's
+mixed same n = 31, 41, 58, 61, 62, 0.16–5.4 %). The rest, 58 of 70, are within reach of an
+efficient estimator: the ring's sidewall coupling's same n = 59, 61, 64 (σ_f 0.03–0.04 %;
+LSCE has poles at 669.9, 688.9 and 721.5 Hz, the first two failing the pin rule — they
+scatter 1.0–1.1 Hz over the model orders, more than a line, beside a stronger mode's
+overlapping band — the third the noise test at ΔE < 0), the membrane's same n = 45–56
+(0.02–0.10 %) and most mixed same-direction modes of the sidewall coupling + mass
+(0.01–0.08 %).
 
 Reproduce: `python benchmarks/validation.py` (about {minutes:.0f} minutes with {jobs} workers on
 the machine below). The test suite runs a seeded subset (`tests/test_validation.py`).
