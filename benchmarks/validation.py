@@ -378,6 +378,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1296 / 1334 (97 %) | 7 / 1820 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-25, end of session 18 | the force autospectrum of each point's accepted hits kept in the FRFs and frf.h5; run's band from it (before: every record, rejected hits too, read a second time), as lsce's on the file (c2f85df; two 5,120 Hz ring combinations' band tops 4–10 Hz higher) | paper | 1180 / 1212 (97 %) | 7 / 1627 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 3.5 min |
 | | | ring | 1296 / 1334 (97 %) | 8 / 1821 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-25, end of session 19 | no change to the package (2895079: benchmarks/crlb.py's poly-reference bound; three estimator changes measured and not adopted, docs/lsce.md "Session 19") — the same 55 records as session 18's | paper | 1180 / 1212 (97 %) | 7 / 1627 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 3.4 min |
+| | | ring | 1296 / 1334 (97 %) | 8 / 1821 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
