@@ -97,8 +97,8 @@ def table(records: list[dict]) -> str:
 
 def totals(records: list[dict]) -> str:
     lines = ["| generator | cases | run errors | found / expected | mislabelled | missed | spurious / adopted "
-             "| surplus | no-effect cases adopting nothing | no-effect cases with a mode set aside "
-             "| effect cases diagnosed right |", "|" + "---|" * 11]
+             "| surplus | aliased found: order and branch read right | no-effect cases adopting nothing "
+             "| no-effect cases with a mode set aside | effect cases diagnosed right |", "|" + "---|" * 12]
     for g in sorted({r["case"]["generator"] for r in records}):
         rs = [r for r in records if r["case"]["generator"] == g]
         ok = [r for r in rs if r["status"] == "ok"]
@@ -110,6 +110,7 @@ def totals(records: list[dict]) -> str:
             f"({100 * s('found') / max(1, s('expected')):.0f} %) | {s('mislabelled')} | {s('missed')} "
             f"| {s('spurious')} / {s('adopted')} ({100 * s('spurious') / max(1, s('adopted')):.1f} %) "
             f"| {sum(r.get('surplus', 0) for r in rs)} "
+            f"| {sum(r.get('aliased_read', 0) for r in rs)} / {sum(r.get('aliased_found', 0) for r in rs)} "
             f"| {sum(1 for r in none if r['diagnosis_right'])} / {len(none)} "
             f"| {sum(1 for r in none if r.get('set_aside'))} / {len(none)} "
             f"| {sum(1 for r in eff if r['diagnosis_right'])} / {len(eff)} |")

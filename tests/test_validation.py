@@ -86,6 +86,23 @@ def test_an_aliased_order_is_found_only_in_its_alias_class(n_spatial, status):
     assert s["detail"][0]["status"].startswith(status)
 
 
+@pytest.mark.parametrize("n, candidates, branch, read", [
+    (32, [], "opposite", True),          # the truth's order
+    (38, [32, 38], "opposite", True),    # among the crowd's candidates
+    (100, [], "opposite", False),        # flagged, but a far alias: found, not read
+    (32, [], "same", False),             # the other branch: found, not read
+])
+def test_an_aliased_order_found_is_read_right_only_with_its_order_and_branch(n, candidates, branch, read):
+    """The ruler finds an order above N/2 by the flag; whether the row also names the
+    truth's order (its n or a candidate) and branch is counted apart."""
+    g = {"frequency_hz": 877.9, "n": 32, "branch": "opposite", "zeta": 0.02, "expected": True, "aliased": True,
+         "alias_class": 2, "foreign": False, "valid": True, "crowd": False}
+    row = {"frequency_hz": 877.91, "damping_ratio": 0.02, "n": n, "branch": branch, "aliased": True, "n_spatial": 2,
+           "n_candidates": candidates}
+    s = score_modes([g], [row], [{"frequency_hz": 877.9}])
+    assert (s["found"], s["aliased_found"], s["aliased_read"]) == (1, 1, int(read))
+
+
 @pytest.mark.parametrize("n, branch, aliased, status", [
     (1, "same", False, "found"),          # the rim's order, read on either branch
     (1, "opposite", False, "found"),

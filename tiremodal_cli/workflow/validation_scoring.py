@@ -25,7 +25,11 @@ either branch (as cavity and tangential modes, which the tool has no label for, 
 found by any label).
 
 A mode a test could show is *found*, *mislabelled* or *missed* by ``run``'s modal table
-(:func:`score_modes`); a diagnosis is right when it adopts what the case holds, or nothing
+(:func:`score_modes`). An order above N/2 is found by a row flagged aliased in its alias
+class (the issue's "flagged as aliased"), whatever order and branch the row reads; how many
+of those rows also read the truth's order (as their n or among their candidates) and its
+branch is counted apart (``aliased_read`` of ``aliased_found``, since session 20: a row
+flagged n = 100 for the truth's n = 32 counts as found, and is not read right). A diagnosis is right when it adopts what the case holds, or nothing
 where the base model absorbs the case's physics within the noise (:func:`detectable`).
 """
 
@@ -156,14 +160,15 @@ def read_modes(path) -> list[dict]:
         out.append({"frequency_hz": float(r["frequency_hz"]), "damping_ratio": float(r["damping_ratio"]),
                     "n": int(n) if n not in ("", None) else None, "branch": r.get("branch") or None,
                     "aliased": str(r.get("n_aliased", "")).lower() == "true",
-                    "n_spatial": int(r["n_spatial"]) if r.get("n_spatial") not in ("", None) else None})
+                    "n_spatial": int(r["n_spatial"]) if r.get("n_spatial") not in ("", None) else None,
+                    "n_candidates": [int(c) for c in (r.get("n_candidates") or "").split()]})
     return out
 
 
 def score_modes(groups: list[dict], rows: list[dict], truth_modes: list[dict]) -> dict:
     """Found / mislabelled / missed / spurious (module docstring) and the errors of the
     found modes' frequencies and damping ratios (relative)."""
-    found = mis = missed = 0
+    found = mis = missed = aliased_found = aliased_read = 0
     f_err, z_err, detail, bw_err = [], [], [], []
     for g in (g for g in groups if g["expected"]):
         cand = [r for r in rows if abs(r["frequency_hz"] / g["frequency_hz"] - 1) <= TOLERANCE]
@@ -183,6 +188,10 @@ def score_modes(groups: list[dict], rows: list[dict], truth_modes: list[dict]) -
             z_err.append(abs(r["damping_ratio"] / g["zeta"] - 1))
             bw_err.append(abs(r["frequency_hz"] - g["frequency_hz"]) / (2 * g["zeta"] * g["frequency_hz"]))
             status = "found"
+            if g["aliased"] and not g["foreign"]:  # its order read: the truth's n is the row's or a candidate
+                aliased_found += 1
+                aliased_read += any(r["branch"] == g["branch"] and g["n"] in [r["n"], *r.get("n_candidates", [])]
+                                    for r in ok)
         elif cand:
             mis += 1
             r = cand[0]
@@ -201,6 +210,7 @@ def score_modes(groups: list[dict], rows: list[dict], truth_modes: list[dict]) -
             "freq_err_median_pct": 100 * float(np.median(f_err)) if f_err else None,
             "damping_err_median_pct": 100 * float(np.median(z_err)) if z_err else None,
             "n_aliased_groups": sum(1 for g in groups if g["expected"] and g["aliased"]),
+            "aliased_found": aliased_found, "aliased_read": aliased_read,
             "n_crowd_groups": sum(1 for g in groups if g["valid"] and g["crowd"]),
             "detail": detail}
 
