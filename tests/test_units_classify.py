@@ -289,3 +289,30 @@ def test_an_alias_beyond_three_grid_lengths_is_read():
     S = _shapes(th, [(n, 0.7) for n in orders])
     cls = classify(f, S, th, LOCS, significance=np.ones(len(f)), damping_ratio=np.full(len(f), 0.01))
     assert [c.n for c in cls] == orders
+
+
+def test_a_clear_mode_below_a_rising_branch_s_aliases_keeps_its_order():
+    """On 34 points an opposite branch rises ever faster (f = 150 + 0.9 n², its steps
+    growing) from n = 1 past the grid's top up to n = 29 at 907 Hz, and a second clear
+    order-1 pattern stands 7 Hz above that mode (the ring's tangential n = 1 opposite, 785 Hz
+    beside the branch's n = 29 at 778 Hz). Its smallest alias, 33, lies at 907 + 3 × 52 Hz
+    or higher by the branch's last step: 150 Hz, many bandwidths, above it. It keeps n = 1, not aliased,
+    out of the branch's order, and does not move the mark: the branch's n = 30 … 33 above
+    it read their own orders (they were read as 38, 65, 100 … when its alias moved the
+    mark). A weak such mode (significance < 0.3) is no evidence against the walk and is
+    read as the alias; on a branch that flattens (steps shrinking) no bound holds."""
+    th = _grid(34)
+    orders = list(range(1, 34))
+    f_of = lambda n: 150.0 + 0.9 * n**2  # noqa: E731
+    f = [f_of(n) for n in orders] + [f_of(29) + 7.0]
+    S = _shapes(th, [(n, -0.7) for n in orders] + [(1, -0.7)])
+    sig = np.r_[np.full(len(orders), 0.8), 0.4]
+    cls = classify(f, S, th, LOCS, significance=sig, damping_ratio=np.full(len(f), 0.02))
+    assert (cls[-1].n, cls[-1].aliased, cls[-1].in_order) == (1, False, False)
+    assert [c.n for c in cls[:-1]] == orders
+    weak = classify(f, S, th, LOCS, significance=np.r_[sig[:-1], 0.1], damping_ratio=np.full(len(f), 0.02))
+    assert weak[-1].aliased and weak[-1].n > 17
+    flat = [f_of(n) if n <= 20 else f_of(20) + 30.0 * (1 - 0.8 ** (n - 20)) for n in orders]  # saturating
+    cls = classify(flat + [flat[orders.index(29)] + 1.0], S, th, LOCS, significance=sig,
+                   damping_ratio=np.full(len(f), 0.02))
+    assert cls[-1].aliased

@@ -18,7 +18,9 @@
   (a live rim channel), which adds the rim's mode to the tyre's n = 1 modes: there a third
   n = 1 reading of a branch is the first alias. On a complete grid a clear mode keeps
   its spatial order when its alias would make the branch fall below a clear mode read at
-  its own order (a family the branch does not hold; :func:`_contradicted`). Only clear modes (both
+  its own order (a family the branch does not hold; ``alias_walk._contradicted``), and so does a
+  clear mode that lies more than its bandwidth below every alias a branch rising at least
+  linearly could put there (``alias_walk._below_rising_branch``); neither moves the mark. Only clear modes (both
   confidences ≥ 0.5, significance ≥ 0.3) move the mark; a mode clear only in its own order
   group moves it by continuing the branch (at most two orders up).
 * **confidences**: ``n_confidence`` is the winning order's energy share; the branch's is
@@ -42,6 +44,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from tiremodal_cli.conventions import OPPOSITE, SAME
+from tiremodal_cli.modal.alias_walk import BranchModes, Reading, resolve_aliases
 from tiremodal_cli.modal.crowds import crowds
 from tiremodal_cli.modal.spatial import grid_design, grid_points, max_order
 
@@ -88,40 +91,6 @@ def order_energy(shape_over_points, angles_rad) -> dict[int, float]:
     return {n: e / tot for n, e in energy.items()} if tot > 0 else energy
 
 
-@dataclass(frozen=True)
-class _Reading:
-    """What one mode's shape says on its own: its spatial order and branch, with confidences."""
-
-    n_spatial: int
-    n_confidence: float
-    branch: str | None
-    branch_confidence: float
-
-    @property
-    def sure(self) -> bool:
-        """Both confidences ≥ 0.5."""
-        return self.n_confidence >= 0.5 and self.branch_confidence >= 0.5
-
-
-@dataclass(frozen=True)
-class _Modes:
-    """The modes being classified: frequencies (Hz), readings, the number of points, and the
-    significances (physical FRFs; own order group) that decide which modes move the mark."""
-
-    freq_hz: np.ndarray
-    reads: list
-    n_points: int
-    significance: np.ndarray | None
-    significance_group: np.ndarray | None
-    free_rim: bool = False
-    complete: bool = True  # every point of the grid measured (no failed points)
-    damping: np.ndarray | None = None  # damping ratios: a half-power bandwidth for the alias choice
-
-    def clear(self, r: int) -> bool:
-        """Both confidences ≥ 0.5 and (when known) significance ≥ 0.3."""
-        return self.reads[r].sure and (self.significance is None or self.significance[r] >= 0.3)
-
-
 def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
              damping_ratio=None, significance_group=None) -> list[Classification]:
     """Classify every mode.
@@ -148,7 +117,7 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     n_p = grid_points(point_angle)  # points failed on a uniform grid alias as the whole grid
     reads = [_read(shapes[r], it, isw, point_angle) for r in range(len(freq_hz))]
     free_rim = _free_rim(shapes, locs)
-    ns = _resolve_aliases(_Modes(freq_hz, reads, n_p, significance, significance_group, free_rim,
+    ns = resolve_aliases(BranchModes(freq_hz, reads, n_p, significance, significance_group, free_rim,
                                  complete=n_p == len(point_angle),
                                  damping=None if damping_ratio is None else np.asarray(damping_ratio, float)))
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
@@ -181,7 +150,7 @@ def _free_rim(shapes, locs) -> bool:
     return bool(rim) and sh.size > 0 and any(np.all(np.isfinite(sh[:, c])) and np.any(sh[:, c] != 0) for c in rim)
 
 
-def _read(shape, it: int, isw: int | None, point_angle) -> _Reading:
+def _read(shape, it: int, isw: int | None, point_angle) -> Reading:
     """One mode's (n_channels, n_points) shape read alone: the order holding most of the
     tread's energy, and the branch from the tread–sidewall product (None: no sidewall)."""
     tread = shape[it]
@@ -194,126 +163,10 @@ def _read(shape, it: int, isw: int | None, point_angle) -> _Reading:
         branch = SAME if rho.real >= 0 else OPPOSITE
         den = np.linalg.norm(tread) * np.linalg.norm(side)
         b_conf = float(abs(rho.real) / den) if den > 0 else 0.0
-    return _Reading(n_s, float(e[n_s]), branch, b_conf)
+    return Reading(n_s, float(e[n_s]), branch, b_conf)
 
 
-def _resolve_aliases(m: _Modes) -> list[int]:
-    """Each mode's order n: within a branch, n rises with frequency; aliasing can only start
-    once the branch has reached the grid's highest order (⌊N/2⌋), and only clear modes
-    (both confidences ≥ 0.5) move the mark."""
-    ns = [o.n_spatial for o in m.reads]
-    for br in {o.branch for o in m.reads}:
-        idx = sorted((r for r in range(len(m.reads)) if m.reads[r].branch == br), key=lambda r: m.freq_hz[r])
-        own: set[int] = set()
-        for _ in range(len(idx)):  # each pass can only add to ``own``
-            _walk_branch(m, idx, ns, own)
-            wrong = (_contradicted(m, idx, ns) - own) if m.complete else set()
-            if not wrong:
-                break
-            own |= wrong
-    return ns
-
-
-def _contradicted(m: _Modes, idx: list[int], ns: list[int]) -> set[int]:
-    """The modes of one branch read as aliases that a clear mode of the branch above them
-    contradicts: one more than a split pair's 5 % higher, read at its own spatial order
-    (unaliased), and that order lies between the mode's spatial order and its alias —
-    the alias would make the branch fall, its spatial order keeps it rising. Such a mode
-    lies off the branch's dispersion (a family the branch does not hold: the ring's
-    sidewall-shear modes of n = 1–5 at 93–98 Hz, beside the branch's own n = 4 at 90 Hz
-    and n = 6 at 126 Hz); it keeps its spatial order. Only on a complete grid: with points
-    missing every order leaks into every spatial reading (:mod:`tiremodal_cli.modal.gaps`),
-    and the paper's failed-points case's n = 8 same at 147.2 Hz, read as spatial order 2, was
-    given n = 2 (its diagnosis's final fit 0.09 → 2.1 % RMS, 8 modes set aside)."""
-    f, reads = m.freq_hz, m.reads
-    out = set()
-    for i, r in enumerate(idx):
-        n_s = reads[r].n_spatial
-        if ns[r] == n_s or not m.clear(r):  # a weak mode's reading is no evidence against the walk
-            continue
-        if any(f[q] > 1.05 * f[r] and m.clear(q) and ns[q] == reads[q].n_spatial and n_s < ns[q] < ns[r]
-               for q in idx[i + 1:]):
-            out.add(r)
-    return out
-
-
-def _walk_branch(m: _Modes, idx: list[int], ns: list[int], own: frozenset | set = frozenset()) -> None:
-    """:func:`_resolve_aliases` along one branch's modes ``idx`` (by frequency), into ``ns``;
-    the modes ``own`` keep their spatial order and do not move the mark (:func:`_contradicted`)."""
-    f, reads, n_top = m.freq_hz, m.reads, max_order(m.n_points)
-    top, marks = -1, []
-    for i, r in enumerate(idx):
-        n = reads[r].n_spatial
-        if r in own:
-            ns[r] = n
-            continue
-        # an alias needs its true order seen below it: the lower spatial order alone is
-        # no evidence (the breathing mode n = 0 can sit anywhere on the branch: with a
-        # stiff tangential or membrane term it lies above dozens of orders)
-        # ... and a spatial order that a clear lower mode of the branch holds, more than a
-        # split pair's 5 % below, is an alias whether or not the mark reached ⌊N/2⌋
-        # (each order appears once per branch)
-        seen = [q for q in idx[:i] if reads[q].n_spatial == n]
-        far = any(f[r] - f[q] > 0.05 * f[r] and m.clear(q) for q in seen)
-        if n == 1 and m.free_rim:
-            # a free rim adds one n = 1 mode (the rim on the tyre's stiffness) to the tyre's
-            # two: n = 1 may appear twice on a branch before an alias is read (a split pair,
-            # within 5 %, counts once)
-            lower = sorted(f[q] for q in seen if f[r] - f[q] > 0.05 * f[r] and m.clear(q))
-            far = 1 + sum(b - a > 0.05 * b for a, b in zip(lower, lower[1:])) >= 2 if lower else False
-        if (n < top and top >= n_top - 1 and seen) or far:
-            alias = _smallest_alias_from(reads[r].n_spatial, top, m.n_points)
-            n = n if alias is None else _by_dispersion(alias, reads[r].n_spatial, f[r], m, r, marks)
-        ns[r] = n
-        # a mode weak in the physical FRFs but clear in its own group (an order beside a
-        # far stronger one of another order) continues the branch one order at a time
-        # (one missed order allowed); a jump is a mode of another kind seen through the
-        # tread (a cavity mode)
-        weak_next = (reads[r].sure and m.significance_group is not None and m.significance_group[r] >= 0.3
-                     and top < n <= top + 2)
-        if m.clear(r) or weak_next:
-            top = max(top, n)
-            marks.append((n, f[r]))
-
-
-def _by_dispersion(smallest: int, n_spatial: int, f_r: float, m: _Modes, r: int, marks: list) -> int:
-    """The alias order of the mode ``r`` at ``f_r`` Hz: the ``smallest`` alias at or above the
-    mark, unless the branch's last step continued (the last two marks' frequency per order)
-    puts another alias of its class nearer ``f_r`` and the two predictions lie more than the
-    mode's half-power bandwidth 2ζf apart — the dispersion tells them (a step of 9.5 Hz per
-    order on the ring's sidewall coupling: its n = 35 same at 418.2 Hz, 40 Hz above the n = 31,
-    was read as n = 33). Where the branch flattens (a crowd) the predictions lie within a
-    bandwidth and the smallest stays. Only on a complete grid, as :func:`_contradicted` (with
-    points missing every order leaks into every spatial reading; on the paper's failed-points
-    combination the walk's new labels changed nothing found but the joint refinement's
-    proposals, 9 → 13, and the run 43 → 154 s)."""
-    if m.damping is None or not m.complete or len(marks) < 2 or marks[-1][0] <= marks[-2][0]:
-        return smallest
-    (n0, f0), (n1, f1) = marks[-2], marks[-1]
-    slope = (f1 - f0) / (n1 - n0)
-    if not slope > 0:
-        return smallest
-    n_p = m.n_points
-    cands = sorted({smallest} | {c for k in range(1, smallest // n_p + 3) for c in (k * n_p - n_spatial, k * n_p + n_spatial)
-                                 if c >= smallest})
-    pred = {c: f1 + slope * (c - n1) for c in cands}
-    best = min(cands, key=lambda c: abs(pred[c] - f_r))
-    return best if abs(pred[best] - pred[smallest]) > 2 * m.damping[r] * f_r else smallest
-
-
-def _smallest_alias_from(n_spatial: int, top: int, n_points: int) -> int | None:
-    """The smallest order k N ± n_s (k ≤ 10) at or above ``top``; None when there is none."""
-    k = 1
-    cands = []
-    while not cands or min(cands) < top:
-        cands = [c for c in (k * n_points - n_spatial, k * n_points + n_spatial) if c >= top]
-        k += 1
-        if k > 10:
-            break
-    return min(cands) if cands else None
-
-
-def _in_dispersion_order(freq_hz, reads: list[_Reading], ns: list[int], significance) -> np.ndarray:
+def _in_dispersion_order(freq_hz, reads: list[Reading], ns: list[int], significance) -> np.ndarray:
     """(n_modes,) bool. Within a branch n rises with frequency; of two modes out of that
     order the less significant is the misread (a weak mode far above the branch's
     saturation read as a high alias is flagged as well)."""
@@ -328,7 +181,7 @@ def _in_dispersion_order(freq_hz, reads: list[_Reading], ns: list[int], signific
     return in_order
 
 
-def _partners_branches(freq_hz, reads: list[_Reading], ns: list[int]) -> list[_Reading]:
+def _partners_branches(freq_hz, reads: list[Reading], ns: list[int]) -> list[Reading]:
     """A mode whose branch cannot be read (the co-located tread and sidewall sensors sit at
     its node) beside a clear mode of the same n within 5 % is taken as that mode's partner:
     it gets the partner's branch (one mode after another, in the list's order)."""
@@ -344,7 +197,7 @@ def _partners_branches(freq_hz, reads: list[_Reading], ns: list[int]) -> list[_R
     return reads
 
 
-def _other_branch(freq_hz, reads: list[_Reading], ns: list[int], in_order, n_points: int) -> list[_Reading]:
+def _other_branch(freq_hz, reads: list[Reading], ns: list[int], in_order, n_points: int) -> list[Reading]:
     """A mode whose branch cannot be read (confidence < 0.5) and that is out of the order of
     the branch it was read on is read on the other branch, when exactly one order of its
     alias class (k N ± n_s, k ≤ 2) fits that branch's dispersion: no clear mode of the branch
@@ -371,7 +224,7 @@ def _other_branch(freq_hz, reads: list[_Reading], ns: list[int], in_order, n_poi
     return reads
 
 
-def _split_pairs(freq_hz, reads: list[_Reading], ns: list[int], in_order) -> list[tuple]:
+def _split_pairs(freq_hz, reads: list[Reading], ns: list[int], in_order) -> list[tuple]:
     """Per mode (pair id, splitting in Hz), or (None, None): two in-order modes of one
     (n, branch) within 5 % in frequency are a split pair."""
     pair_id = {}
