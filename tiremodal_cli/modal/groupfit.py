@@ -23,8 +23,8 @@ from tiremodal_cli.modal.lsfd import lsfd, lsfd_participation, significance
 if TYPE_CHECKING:  # for the annotation only: modes imports this module
     from tiremodal_cli.modal.modes import ModalOptions
 
-__all__ = ["GroupData", "GroupFit", "NOISE_ALPHA", "PEAK_OVER_NOISE", "PIN_SIGMAS", "fit_group", "fit_group_poly", "own_peaks",
-           "pin_limit"]
+__all__ = ["GroupData", "GroupFit", "NOISE_ALPHA", "PEAK_OVER_NOISE", "PIN_SIGMAS", "fit_clusters", "fit_group",
+           "fit_group_poly", "own_peaks", "pin_limit"]
 
 
 @dataclass(frozen=True)
@@ -109,6 +109,18 @@ def fit_group(data: GroupData, s, std_hz=None) -> tuple:
         rejected.append(_rejection(s[r], data.group, why))
         s, std_hz = np.delete(s, r), np.delete(std_hz, r)
     return GroupFit(fit.residues, fit.synthesis, sig, own), s, rejected, refit
+
+
+def fit_clusters(data: GroupData, clusters) -> tuple:
+    """The group's fit of a stabilization diagram's selected clusters: (their poles (rad/s),
+    their participations, and :func:`fit_group_poly`'s result when every cluster has one
+    (a poly-reference sweep), else :func:`fit_group`'s)."""
+    s = np.array([c.representative.s for c in clusters], dtype=complex)
+    parts = [c.representative.participation for c in clusters]
+    std = np.array([c.frequency_std_hz for c in clusters])
+    if s.size and all(pt is not None for pt in parts):
+        return s, parts, fit_group_poly(data, s, np.array(parts), std)
+    return s, parts, fit_group(data, s, std)
 
 
 def _harmonic_major(x3, data: GroupData):

@@ -21,7 +21,7 @@ from tiremodal_cli.frf.windows import correct_poles
 from tiremodal_cli.modal.band import band_or_every_line, default_band, live_channels, no_stable_mode, order_for_lines
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.gaps import cleaned_groups, weak_in_frfs
-from tiremodal_cli.modal.groupfit import GroupData, fit_group, fit_group_poly, row_visibility
+from tiremodal_cli.modal.groupfit import GroupData, fit_clusters, row_visibility
 from tiremodal_cli.modal.joint import add_missing_orders
 from tiremodal_cli.modal.refine import dropped_poles, refine_adopted
 from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
@@ -33,6 +33,7 @@ from tiremodal_cli.modal.merge import COPY_MAX_AMPLITUDE, GroupMode, merge_group
 from tiremodal_cli.modal.misreads import without_misreads
 from tiremodal_cli.modal.options import ModalOptions
 from tiremodal_cli.modal.plscf import sweep_plscf
+from tiremodal_cli.modal.rescue import far_bands, unexplained_bands, with_rescued
 from tiremodal_cli.modal.spatial import decompose, grid_points, leakage
 from tiremodal_cli.modal.stabilization import stabilize
 from tiremodal_cli.modal.symmetry import antisymmetric_share
@@ -181,19 +182,24 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
 
     Returns (diagrams, modes (MergedMode), rejected, the physical synthesis (n_frf, K), each
     group's kept fit ({group: kept or None}, for the pole refinement))."""
-    diagrams, found, rejected, kept = [], [], [], {}
+    diagrams, found, rejected, kept, out = [], [], [], {}, {}
     synth = np.zeros(band.flat.shape, dtype=complex)
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
         data = GroupData(band.freq, rows, back, band.flat, "accelerance", opt, g, rows.shape[0] // band.Hb.shape[0],
                          band.Hb.shape[0])
-        d, modes, rej, group_synth, kept[g] = _group_modes(data, spatial, group_max)
+        out[g] = (data, _group_modes(data, spatial, group_max))
+        if progress:
+            progress(i + 1, len(groups))
+    every = [m.pole for _, r in out.values() for m in r[1]]
+    for g, (data, r) in out.items():  # peaks no pole of any group stands for (modal.rescue)
+        far = far_bands(r[5], every, band.freq[1] - band.freq[0]) if not gaps else []
+        out[g] = (data, _group_modes(data, spatial, group_max, far)) if far else out[g]
+    for g, (_, (d, modes, rej, group_synth, kept[g], _)) in sorted(out.items()):
         diagrams.append((g, d))
         found += modes
         rejected += rej
         if group_synth is not None:
             synth += group_synth
-        if progress:
-            progress(i + 1, len(groups))
     if not found:
         raise no_stable_mode(band.freq, group_max)
     if gaps:
@@ -270,23 +276,20 @@ def _group_poles(data: GroupData, b, spatial: bool, group_max: int) -> list:
     return sweep(b, range(2, group_max + 1), skip=opt.skip)
 
 
-def _group_modes(data: GroupData, spatial: bool, group_max: int):
+def _group_modes(data: GroupData, spatial: bool, group_max: int, rescue=()):
     """One order group: its stabilization diagram, its modes (GroupMode), the poles dropped
     after LSFD, its synthesis in the physical FRFs, and (with ``opt.refine``; else None)
     what :func:`_refine_adopted` needs: (data, kept poles, their participation, the fit's
     synthesis in the group's rows, the poles the fit dropped and their participation —
     :func:`~tiremodal_cli.modal.refine.dropped_poles`)."""
     d = guarded_diagram(data, lambda b: _group_poles(data, b, spatial, group_max))
-    s = np.array([c.representative.s for c in d.selected()], dtype=complex)
-    s0 = s.copy()
-    parts = [c.representative.participation for c in d.selected()]
-    std = np.array([c.frequency_std_hz for c in d.selected()])
-    if s.size and all(pt is not None for pt in parts):
-        fit, s, rej, refit = fit_group_poly(data, s, np.array(parts), std)
-    else:
-        fit, s, rej, refit = fit_group(data, s, std)
+    s0, parts, (fit, s, rej, refit) = fit_clusters(data, d.selected())
+    d2 = rescue and with_rescued(data, d, rescue, lambda dd, b, top: _group_poles(dd, b, spatial, top), group_max)
+    if d2:  # peaks no pole stood for (``rescue``): the sweep at twice the order found poles there
+        d, (s0, parts, (fit, s, rej, refit)) = d2, fit_clusters(data, d2.selected())
+    bands = unexplained_bands(data.freq, data.rows, 0 if fit is None else fit.synthesis, s)
     if fit is None:
-        return d, [], rej, None, None
+        return d, [], rej, None, None, bands
     scatter = {c.representative.s: c.frequency_std_hz for c in d.selected()}
     noise = float(np.sqrt(np.mean(np.sum(np.abs(data.rows - fit.synthesis) ** 2, axis=0))))
     seen = row_visibility(fit.residues, s, data.rows - fit.synthesis)
@@ -296,10 +299,11 @@ def _group_modes(data: GroupData, spatial: bool, group_max: int):
                        float(seen[k]))
              for k in range(s.size)]
     if not data.opt.refine:
-        return d, modes, rej, data.back @ fit.synthesis, None
+        return d, modes, rej, data.back @ fit.synthesis, None, bands
     P = np.array(parts) if all(pt is not None for pt in parts) else None
     L = None if P is None else np.array([P[list(s0).index(p)] for p in s])
-    return d, modes, rej, data.back @ fit.synthesis, (data, s, L, fit.synthesis) + dropped_poles(s0, P, s, data.freq)
+    return (d, modes, rej, data.back @ fit.synthesis, (data, s, L, fit.synthesis) + dropped_poles(s0, P, s, data.freq),
+            bands)
 
 
 def _result(band: _Band, shape, modes, synth, exp_tau_s, *, diagrams, rejected, meta) -> ModalResult:
