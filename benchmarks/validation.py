@@ -210,7 +210,10 @@ n = N same mode at 167.3 Hz; cavity and
 tangential modes, which the tool has no label for: any label; a free rim's "rim" mode: n = 1, not aliased,
 either branch — the generators' "rim" label is the rim's share of the kinetic energy, which a test
 cannot measure without the masses), *mislabelled* when only the
-frequency matches, *missed* otherwise. A table mode with no truth mode of any kind within
+frequency matches, *missed* otherwise. Of the aliased modes found, the totals also count how
+many rows read the truth's order (as their n or among their crowd candidates) and its branch
+("aliased found: order and branch read right", since session 20): the flag alone, which the
+issue asks for, accepts a row that names a far alias or the other branch. A table mode with no truth mode of any kind within
 0.3 % is *spurious*; table modes within 0.3 % of a truth mode that a one-to-one matching of
 table to truth leaves over are *surplus* (one mode reported twice). The diagnosis is *right*
 when every effect of the case has one of its
@@ -310,6 +313,19 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1284 / 1334 (96 %) | 10 | 6 / 1800 (0.3 %) | 0 | **14 / 14** (the 5,120 Hz Timoshenko + rim now right: its band's top 4 Hz higher without the rejected hits) | 0 |
 | seeds + 3000, session 18 | c2f85df | paper | 1174 / 1212 (97 %) | 8 | 27 / 1613 (1.7 %) | 2: added mass 6 / 55, failed-points combination 11 / 72 | 12 / 13 (failed-points combination: rhoA) | 0 |
 | | | ring | 1290 / 1334 (97 %) | 9 | 8 / 1812 (0.4 %) | 0 | 13 / 14 (the sidewall coupling adopts nothing) | 0 |
+| seeds + 1000, session 20 (a peak no group's pole stands for re-swept at twice the order; a clear mode below every alias of a rising branch keeps its order) | 9f4d18a | paper | 1176 / 1212 (97 %) | 9 | 18 / 1623 (1.1 %) | 1: failed-points combination 11 / 69 | 13 / 13 | 0 |
+| | | ring | **1290** / 1334 (97 %) | 7 | 11 / 1826 (0.6 %) | 1: mass 4 / 65 | 13 / 14 (mass: air_cavity beside added_mass) | 0 |
+| seeds + 2000, session 20 | 9f4d18a | paper | 1168 / 1212 (96 %) | 16 | 15 / 1625 (0.9 %) | 2: failed-points combination 4 / 66, added mass 3 / 50 | 12 / 13 (failed-points combination: rhoA) | 0 |
+| | | ring | **1287** / 1334 (96 %) | 9 | 6 / 1802 (0.3 %) | 0 | 14 / 14 | 0 |
+| seeds + 3000, session 20 | 9f4d18a | paper | 1174 / 1212 (97 %) | 8 | 27 / 1613 (1.7 %) | 2: added mass 6 / 55, failed-points combination 11 / 72 | 12 / 13 (failed-points combination: rhoA) | 0 |
+| | | ring | **1293** / 1334 (97 %) | 8 | 8 / 1814 (0.4 %) | 0 | 13 / 14 (the sidewall coupling adopts nothing) | 0 |
+
+Session 20's held-out runs, case by case against session 18's (c2f85df): only three ring
+cases move, at every seed — the 5,120 Hz tangential combination (+1 found, −1 mislabelled: its
+n = 1 opposite read as n = 1), the 5,120 Hz Timoshenko + rim combination (+1: the rim's n = 1 at
+24.45 Hz) and the 40-point 5,120 Hz rim combination (+2, +1, +1: its low modes, re-swept); the
+paper's records are the same. Aliased modes found whose order and branch are read right:
+paper 398 / 414, 376 / 413, 366 / 411; ring 410 / 422, 399 / 419, 413 / 426.
 
 What does not hold on other seeds: (1) **the paper's failed-points combination** (2,560 Hz,
 24 points, one hit, 2 % noise, double hits and overloads: 5 points fail) — at seven seeds
@@ -381,6 +397,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1296 / 1334 (97 %) | 8 / 1821 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-25, end of session 19 | no change to the package (2895079: benchmarks/crlb.py's poly-reference bound; three estimator changes measured and not adopted, docs/lsce.md "Session 19") — the same 55 records as session 18's | paper | 1180 / 1212 (97 %) | 7 / 1627 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 3.4 min |
 | | | ring | 1296 / 1334 (97 %) | 8 / 1821 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-25, end of session 20 | a peak no order group's pole stands for (the residual over its local noise level) re-swept at twice the group's order (modal.rescue: the 5,120 Hz ring's rim n = 1 at 24.45 Hz); a clear mode more than its bandwidth below every alias a rising branch could hold keeps its spatial order (the 5,120 Hz tangential ring's n = 1 opposite, and the branch's n = 30 … 42 no longer read as n = 38, 65, 100 …); the ruler counts the aliased modes found whose order and branch are read right (above) | paper | 1180 / 1212 (97 %) | 7 / 1627 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 3.4 min |
+| | | ring | 1298 / 1334 (97 %) | 8 / 1822 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
