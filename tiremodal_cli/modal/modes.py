@@ -178,7 +178,9 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
 def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool, group_max: int,
                      opt: ModalOptions, progress, orthogonal: bool = False):
     """Every order group swept and fitted, and their modes merged into one per physical pole
-    (``orthogonal``: a complete grid of a structure symmetric about its sensors, merge_groups).
+    (``orthogonal``: a complete grid of a structure symmetric about its sensors, merge_groups);
+    a group whose fit left a peak that no group's pole reaches, on a complete grid, fitted
+    again with the sweep at twice its order there (:mod:`~tiremodal_cli.modal.rescue`).
 
     Returns (diagrams, modes (MergedMode), rejected, the physical synthesis (n_frf, K), each
     group's kept fit ({group: kept or None}, for the pole refinement))."""
@@ -278,10 +280,12 @@ def _group_poles(data: GroupData, b, spatial: bool, group_max: int) -> list:
 
 def _group_modes(data: GroupData, spatial: bool, group_max: int, rescue=()):
     """One order group: its stabilization diagram, its modes (GroupMode), the poles dropped
-    after LSFD, its synthesis in the physical FRFs, and (with ``opt.refine``; else None)
-    what :func:`_refine_adopted` needs: (data, kept poles, their participation, the fit's
+    after LSFD, its synthesis in the physical FRFs, (with ``opt.refine``; else None) what
+    :func:`_refine_adopted` needs: (data, kept poles, their participation, the fit's
     synthesis in the group's rows, the poles the fit dropped and their participation —
-    :func:`~tiremodal_cli.modal.refine.dropped_poles`)."""
+    :func:`~tiremodal_cli.modal.refine.dropped_poles`), and the bands where its fit leaves a
+    peak no kept pole stands for (:func:`~tiremodal_cli.modal.rescue.unexplained_bands`).
+    ``rescue`` (bands, Hz): the sweep redone at twice the order adds its clusters there."""
     d = guarded_diagram(data, lambda b: _group_poles(data, b, spatial, group_max))
     s0, parts, (fit, s, rej, refit) = fit_clusters(data, d.selected())
     d2 = rescue and with_rescued(data, d, rescue, lambda dd, b, top: _group_poles(dd, b, spatial, top), group_max)
