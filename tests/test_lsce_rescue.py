@@ -123,3 +123,23 @@ def test_the_rim_mode_the_default_sweep_missed_is_found(ring_5120_rim):
     assert abs(f[k] / rim - 1) <= 0.003
     assert default.n[k] == 1 and default.n_spatial[k] == 1
     assert np.min(np.abs(np.asarray(without.frequency_hz, float) / rim - 1)) > 0.003
+
+
+def test_no_re_sweep_when_the_lines_allow_no_higher_order():
+    """A band of 90 lines holds a poly-reference sweep of order (90 − 2) / 3 = 29 at most and
+    a single-reference one of 44: a group already swept that far is not swept again (the
+    sweep would be the same), and nothing is added."""
+    from dataclasses import replace
+
+    from tiremodal_cli.modal.groupfit import GroupData
+    from tiremodal_cli.modal.options import ModalOptions
+    from tiremodal_cli.modal.rescue import with_rescued
+
+    f = F[:90]
+    data = GroupData(f, np.zeros((2, f.size), complex), np.eye(2), np.zeros((2, f.size), complex), "accelerance",
+                     replace(ModalOptions(), poly_order=29), 1, 1, 2)
+
+    def sweep(*a):
+        raise AssertionError("swept again")
+
+    assert with_rescued(data, None, [(10.0, 20.0)], sweep, 44) is None

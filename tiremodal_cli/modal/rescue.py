@@ -104,14 +104,17 @@ def rescue_clusters(diagram, bands) -> list:
 def with_rescued(data, diagram, bands, sweep, group_max: int):
     """``diagram`` with the stable clusters, inside ``bands``, of the group's sweep redone at
     twice its highest order (as far as the band's K lines allow: K/2 − 1 for one reference,
-    (K − 2)/3 for two); None when it has none there.
+    (K − 2)/3 for two); None when it has none there, or when the lines allow no higher order.
 
     data : GroupData ; diagram : Diagram ; bands : :func:`unexplained_bands` ;
     sweep : callable (GroupData, Band, highest order) → list of OrderPoles ; group_max : int
     """
     K = data.freq.size
-    twice = replace(data, opt=replace(data.opt, poly_order=min(2 * data.opt.poly_order, (K - 2) // 3)))
-    top = min(2 * group_max, K // 2 - 1)
+    poly, top = min(2 * data.opt.poly_order, (K - 2) // 3), min(2 * group_max, K // 2 - 1)
+    if poly <= data.opt.poly_order and top <= group_max:
+        return None  # the lines allow no higher order: the sweep would be the same
+    twice = replace(data, opt=replace(data.opt, poly_order=max(poly, data.opt.poly_order)))
+    top = max(top, group_max)
     extra = rescue_clusters(guarded_diagram(twice, lambda b: sweep(twice, b, top)), bands)
     for c in extra:
         c.reason = f"{c.reason}; from a sweep to twice the order, in a peak the group's fit left unexplained"
