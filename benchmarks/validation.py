@@ -202,8 +202,11 @@ top is fitted to one flank, and `lsce` rejects it — and the hammer's force wit
 low-frequency level),
 its peak accelerance at its best channel and point is at least 3 × the H1 noise floor, and
 no alias of its order (n' ≡ ±n mod N) on its branch lies within one half-power bandwidth
-(a degenerate cos/sin pair is one mode). It is *found* when the modal table has a mode
-within 0.3 % with the right n and branch (orders above N/2: flagged aliased, in the order
+(a degenerate cos/sin pair is one mode; so is a pair of one order and branch split by less than
+ζ f, at its members' mean). It is *found* when the modal table has a mode
+within 0.3 % — of the mean or, since session 21, of one of the pair's members (an added mass
+splits a pair by 0.5–0.6 % at ζ = 2 %: a row at one member, 0.3 % off the mean, had been
+counted missed although no row was off any mode) — with the right n and branch (orders above N/2: flagged aliased, in the order
 group the order aliases onto, n mod N folded to 0 … N/2 — since session 15; before, any
 aliased row counted, and in 14 paper cases a crowd row of another group stood for the
 n = N same mode at 167.3 Hz; cavity and

@@ -219,3 +219,23 @@ def test_each_effect_of_a_pair_is_required_only_where_detectable():
     assert not diagnosis_right(phys, ["tangential", "b"], alone)
     assert not diagnosis_right(phys, ["tangential"], True)  # both detectable: both required
     assert diagnosis_right(phys, [], False)
+
+
+@pytest.mark.parametrize("f_row, status", [
+    (402.85, "found"),       # at the lower member: 0.28 % below the pair's mean, but that member
+    (402.64, "found"),       # 0.05 % from the lower member, 0.33 % from the mean
+    (405.09, "found"),       # at the upper member
+    (403.97, "found"),       # at the mean (the pair read as one mode)
+    (401.10, "missed"),      # 0.44 % below the lower member: neither
+])
+def test_a_split_pair_is_found_at_either_member_or_at_its_mean(f_row, status):
+    """An added mass splits each order's cos/sin pair (the ring's n = 16 opposite at 402.848
+    and 405.085 Hz, 0.55 % apart at ζ = 2 %): the ruler takes a pair split by less than ζ f
+    as one truth mode, and a row at either member is that mode."""
+    g = {"frequency_hz": 403.9665, "members": [402.848, 405.085], "n": 16, "branch": "opposite", "zeta": 0.02,
+         "expected": True, "aliased": False, "foreign": False, "valid": True, "crowd": False}
+    row = {"frequency_hz": f_row, "damping_ratio": 0.02, "n": 16, "branch": "opposite", "aliased": False}
+    s = score_modes([g], [row], [{"frequency_hz": 402.848}, {"frequency_hz": 405.085}])
+    assert s["detail"][0]["status"] == status
+    if status == "found":
+        assert s["freq_err_median_pct"] <= 0.06
