@@ -316,3 +316,32 @@ def test_a_clear_mode_below_a_rising_branch_s_aliases_keeps_its_order():
     cls = classify(flat + [flat[orders.index(29)] + 1.0], S, th, LOCS, significance=sig,
                    damping_ratio=np.full(len(f), 0.02))
     assert cls[-1].aliased
+
+
+def test_on_a_grid_with_failed_points_a_reading_the_group_contradicts_is_read_at_the_group():
+    """An opposite branch n = 0 … 12 on 19 of 24 points (the paper's failed-points
+    combination's grid). Its n = 4 mode's residues hold the leak of a stronger order-11
+    response (LSFD on a gappy grid: every order leaks into every other), so its tread
+    shape reads spatial order 11 — clear (confidence ≥ 0.5, significance ≥ 0.3), it moves
+    the alias mark to 11 and the walk then reads the branch's n = 9 … 11 as aliases (the
+    collapse measured with the paper's model to 120 orders: n = 9, 10, 11 read as 15, 34,
+    35). The order group the pole was estimated in (4) is read instead; on a complete grid
+    the group is not consulted."""
+    th_all = _grid(24)
+    th = np.delete(th_all, [7, 13, 14, 17, 21])
+    ns = list(range(13))
+    f = [184.0 + 0.8 * n**2 for n in ns]
+    S = _shapes(th, [(n, -0.5) for n in ns])
+    S[4, 0] = 0.45 * np.cos(4 * th) + 0.9 * np.cos(11 * th + 0.3)  # the leak dominates the shape
+    S[4, 1] = -0.5 * S[4, 0]
+    kw = dict(significance=[0.6] * 13, damping_ratio=[0.03] * 13)
+    before = classify(f, S, th, LOCS, **kw)
+    assert before[4].n_spatial == 11 and [c.n for c in before[9:12]] != [9, 10, 11]  # what the rule fixes
+    after = classify(f, S, th, LOCS, **kw, group=np.array(ns))
+    assert [c.n for c in after] == ns and not any(c.aliased for c in after)
+    assert after[4].n_spatial == 4 and after[4].n_confidence < before[4].n_confidence
+    # a complete grid: the shape's own reading stands whatever the group
+    Sc = _shapes(th_all, [(n, -0.5) for n in ns])
+    Sc[4, 0] = 0.45 * np.cos(4 * th_all) + 0.9 * np.cos(11 * th_all + 0.3)
+    Sc[4, 1] = -0.5 * Sc[4, 0]
+    assert classify(f, Sc, th_all, LOCS, **kw, group=np.array(ns))[4].n_spatial == 11

@@ -355,7 +355,7 @@ def add_missing_orders(freq, Hb, point_angle, locs, modes, synth, form: str = "a
     f, z = poles_to_modal(np.array([m.pole for m in modes]))
     shapes = np.array([m.residues for m in modes]).reshape(len(modes), n_c, n_p)
     classes = classify(f, shapes, point_angle, locs, np.array([m.significance for m in modes]), z,
-                       np.array([m.significance_in_group for m in modes]))
+                       np.array([m.significance_in_group for m in modes]), np.array([m.group for m in modes]))
     props = propose(modes, classes, (freq[0], freq[-1]), grid_points(point_angle))
     if not props:
         return modes, synth, []

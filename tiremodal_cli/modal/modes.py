@@ -387,7 +387,7 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
         if "tread" in locs:
             res, classes = without_misreads(res, lambda m: classify(
                 m.freq_hz, m.shapes[:, live], r.point_angle, locs, m.significance, m.damping_ratio,
-                m.meta.get("significance_in_group")))
+                m.meta.get("significance_in_group"), m.group))
             res.meta["crowds"] = [{"frequency_hz": float(res.freq_hz[i]), "n_spatial": c.n_spatial,
                                    "n_candidates": list(c.n_candidates),
                                    "reason": "orders aliasing onto one spatial order lie within one half-power "
