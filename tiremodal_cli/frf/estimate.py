@@ -29,7 +29,8 @@ import scipy.fft
 
 from tiremodal_cli.conventions import FRF_FORMS
 from tiremodal_cli.errors import DataFormatError, ParameterError
-from tiremodal_cli.frf.screening import Rejection, inconsistent_hits, test_wide_checks, time_checks
+from tiremodal_cli.frf.screening import (Rejection, bounced_only_hits, inconsistent_hits, test_wide_checks,
+                                         time_checks)
 from tiremodal_cli.frf.windows import exponential_window, force_window
 
 log = logging.getLogger(__name__)
@@ -238,6 +239,7 @@ class _Averages:
     rejections: list
     not_run: list
     gff: np.ndarray          # (n_points, n_band) mean |F|² over the accepted hits
+    bounced_used: list       # the double hits used for points with no other (bounced_only_hits)
 
 
 def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResult:
@@ -272,15 +274,17 @@ def compute_frf(m, opt: FRFOptions = FRFOptions(), *, progress=None) -> FRFResul
     n_avg = np.zeros(n_p, dtype=int)
     rejections, peaks = [], np.zeros((n_p, m.n_hits, n_c))
     bounce, not_run = test_wide_checks(m, plan.fs, opt)
+    bounced_used: list[dict] = []
     for ip in range(n_p):
-        rej, n_avg[ip], peaks[ip], sums = _point(m, ip, plan, opt, bounce.get(ip, ()))
+        rej, n_avg[ip], peaks[ip], sums, used = _point(m, ip, plan, opt, bounce.get(ip, ()))
         rejections += rej
+        bounced_used += used
         if sums is not None:
             H[:, ip], coh[:, ip] = _from_products(*sums, opt.estimator)
             gff[ip] = sums[1][0] / n_avg[ip]
         if progress:
             progress(ip + 1, n_p)
-    return _result(m, plan, opt, _Averages(H, coh, n_avg, peaks, rejections, not_run, gff))
+    return _result(m, plan, opt, _Averages(H, coh, n_avg, peaks, rejections, not_run, gff, bounced_used))
 
 
 def _plan(m, opt: FRFOptions) -> _Plan:
@@ -305,14 +309,17 @@ def _point(m, ip: int, plan: _Plan, opt: FRFOptions, bounced):
     f = np.asarray(m.force[ip], dtype=plan.real)
     y = np.asarray(m.response[ip], dtype=plan.real)
     rej, bad, peaks, extent = time_checks(f, y, plan.fs, opt, plan.names, ip)
-    for h, notch in bounced:
+    for h, notch, _ in bounced:
         if not bad[h]:
             rej.append(Rejection(ip, h, f"double hit (a bounce within the pulse: force spectrum notch at "
                                         f"{notch:.0f} Hz)", "force"))
             bad[h] = True
-    acc = np.flatnonzero(~bad)
+    acc, used = np.flatnonzero(~bad), []
+    if not acc.size and opt.check_hits:
+        acc, stop, used = bounced_only_hits(f, plan.fs, rej, ip, extent, {h: d for h, _, d in bounced})
+        extent, rej = (extent[0], stop) if acc.size else extent, [r for r in rej if r.hit not in set(acc.tolist())]
     if not acc.size:
-        return rej, 0, peaks, None
+        return rej, 0, peaks, None, used
     a, p, e = _hit_products(f, y, acc, extent, plan, opt)
     if opt.check_hits and acc.size >= 3:
         keep, more = inconsistent_hits(a, p, e, acc, opt, plan.names, ip)
@@ -320,8 +327,8 @@ def _point(m, ip: int, plan: _Plan, opt: FRFOptions, bounced):
         if not keep.all():
             a, p, e, acc = a[keep], p[keep], e[keep], acc[keep]
     if not acc.size:
-        return rej, 0, peaks, None
-    return rej, acc.size, peaks, (a.sum(axis=0), p.sum(axis=0), e.sum(axis=0))
+        return rej, 0, peaks, None, used
+    return rej, acc.size, peaks, (a.sum(axis=0), p.sum(axis=0), e.sum(axis=0)), used
 
 
 def _hit_products(f, y, acc, extent, plan: _Plan, opt: FRFOptions):
@@ -377,16 +384,16 @@ def _result(m, plan: _Plan, opt: FRFOptions, avg: _Averages) -> FRFResult:
                      channel_name=names, channel_location=tuple(m.channel_location),
                      channel_angle=np.asarray(m.channel_angle), rejections=tuple(rejections),
                      dead_channels=dead_ch, estimator=opt.estimator, form=opt.form, exp_tau_s=plan.tau,
-                     sample_rate=plan.fs, n_samples=plan.ns, meta=_meta(opt, plan, failed, avg.not_run),
+                     sample_rate=plan.fs, n_samples=plan.ns, meta=_meta(opt, plan, failed, avg.not_run, avg.bounced_used),
                      force_autospectrum=gff)
 
 
-def _meta(opt: FRFOptions, plan: _Plan, failed, not_run) -> dict:
-    """The windows applied, the points left out, the precision, the checks not run."""
+def _meta(opt: FRFOptions, plan: _Plan, failed, not_run, bounced_used) -> dict:
+    """The windows applied, the points left out, the double hits used, the precision, the checks not run."""
     return {"force_window": {"applied": opt.force_window, "length_s": opt.force_window_s,
                              "taper_s": opt.taper_s, "rule": "pulse extent ×2, ≥ 8 samples, 4-sample cosine tapers"
                              if opt.force_window_s is None else "given"},
             "exponential_window": None if plan.tau is None else {"tau_s": plan.tau, "end_value": float(plan.exp_w[-1]),
                                                                  "added_decay_rate_per_s": 1.0 / plan.tau},
-            "failed_points": [int(i) for i in failed], "precision": np.dtype(plan.real).name,
-            "checks_not_run": not_run}
+            "failed_points": [int(i) for i in failed], "double_hits_used": bounced_used,
+            "precision": np.dtype(plan.real).name, "checks_not_run": not_run}

@@ -172,7 +172,7 @@ def bounce_in_pulse(force, fs: float, *, min_relative: float = 0.2, band_top: fl
     """
     seg, noise, ok = pulse_segments(force, fs)
     return bounce_from_segments(seg, noise, ok, fs, min_relative=min_relative, band_top=band_top,
-                                false_alarm=false_alarm, min_hits=min_hits)
+                                false_alarm=false_alarm, min_hits=min_hits)[:3]
 
 
 def pulse_segments(force, fs: float):
@@ -222,14 +222,18 @@ def pulse_segments(force, fs: float):
 def bounce_from_segments(seg, noise, ok, fs: float, *, min_relative: float = 0.2, band_top: float | None = None,
                          false_alarm: float = 1e-3, min_hits: int = 5):
     """:func:`bounce_in_pulse` from :func:`pulse_segments` (gathered point by point by a
-    caller that reads the records lazily). Same returns."""
+    caller that reads the records lazily). Same returns, and ``depth`` (n_records,): each
+    flagged record's deepest dip below the median shape, as a ratio, over the lines where
+    the median is within 20 dB of its 0 Hz level (1: not flagged) — the notch's depth
+    relative to the record's own 0 Hz level, (1 − a)/(1 + a) for a bounce of size a."""
     from scipy.special import ndtri
 
     n, L = seg.shape
     flags = np.zeros(n, dtype=bool)
     notch = np.full(n, np.nan)
+    depth_out = np.ones(n)
     if ok.sum() < min_hits:
-        return flags, notch, False
+        return flags, notch, False, depth_out
     band_top = 0.3125 * fs if band_top is None else band_top
     nfft = 1 << int(np.ceil(np.log2(8 * L)))
     freq = np.fft.rfftfreq(nfft, 1 / fs)
@@ -252,4 +256,7 @@ def bounce_from_segments(seg, noise, ok, fs: float, *, min_relative: float = 0.2
     flags[:] = hit.any(axis=1)
     depth = np.where(hit, x / np.maximum(med, np.finfo(float).tiny), np.inf)
     notch[flags] = freq[sel][np.argmin(depth[flags], axis=1)]
-    return flags, notch, True
+    strong = med >= 0.1  # within 20 dB of the 0 Hz level
+    if strong.any():
+        depth_out[flags] = np.nanmin(x[flags][:, strong] / med[strong], axis=1)
+    return flags, notch, True, depth_out

@@ -13,12 +13,21 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft
 
 from tiremodal_cli.frf.hits import bounce_from_segments, clip_count, double_hit, pulse_extent, pulse_segments
+from tiremodal_cli.frf.windows import force_window
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Rejection", "time_checks", "test_wide_checks", "inconsistent_hits", "leave_one_out_residual"]
+__all__ = ["Rejection", "time_checks", "test_wide_checks", "inconsistent_hits", "leave_one_out_residual",
+           "bounced_only_hits", "BOUNCE_NOTCH_DB"]
+
+#: deepest notch a bounce may cut in a hit's force spectrum, over the lines where that hit's
+#: first blow is within this much of its peak, for the hit to stand in for a point that has
+#: no other (the hammer-test rule of the band, Ewins 2000 §3.6: the force may fall 10–20 dB;
+#: :data:`tiremodal_cli.modal.band.FORCE_DROP_DB`, the same value)
+BOUNCE_NOTCH_DB = 20.0
 
 
 @dataclass(frozen=True)
@@ -123,7 +132,8 @@ def test_wide_checks(m, fs, opt):
     (:func:`tiremodal_cli.frf.hits.bounce_in_pulse` over all the force records; read a point
     at a time, kept as 25 ms segments). ``m`` is the Measurement, ``opt`` the FRFOptions.
 
-    Returns {point: [(hit, notch_hz), ...]} and the checks that could not run, each said once
+    Returns {point: [(hit, notch_hz, depth), ...]} (``depth``: the notch's, as a ratio; see
+    :func:`~tiremodal_cli.frf.hits.bounce_from_segments`) and the checks that could not run, each said once
     (a warning, and ``meta["checks_not_run"]``): the bounce check with fewer than 5 usable
     hits in the test, the consistency check with fewer than 3 hits per point.
     """
@@ -133,12 +143,12 @@ def test_wide_checks(m, fs, opt):
     n_p, n_h = m.n_points, m.n_hits
     parts = [pulse_segments(np.asarray(m.force[ip]), fs) for ip in range(n_p)]  # one point at a time
     seg, noise, ok = (np.concatenate([p[k] for p in parts]) for k in range(3))
-    flags, notch, ran = bounce_from_segments(seg, noise, ok, fs, min_relative=opt.double_hit_relative)
+    flags, notch, ran, depth = bounce_from_segments(seg, noise, ok, fs, min_relative=opt.double_hit_relative)
     if not ran:
         not_run.append(f"double hits within the pulse (force spectrum): needs at least 5 usable hits in the test "
                        f"(finite, non-zero force), it has {int(ok.sum())} of {n_p * n_h}")
     for k in np.flatnonzero(flags):
-        out.setdefault(int(k) // n_h, []).append((int(k) % n_h, float(notch[k])))
+        out.setdefault(int(k) // n_h, []).append((int(k) % n_h, float(notch[k]), float(depth[k])))
     if n_h < 3:
         not_run.append(f"consistency of the hits: needs at least 3 hits per point, the test has {n_h}")
     for what in not_run:
@@ -176,3 +186,90 @@ def inconsistent_hits(a, p, e, acc, opt, names, ip) -> tuple[np.ndarray, list[Re
                                     f"(residual {d[i, c]:.2f} of its energy, {ratio[i, c]:.1f}× the "
                                     "hits' median)", names[c]))
     return ~flag.any(axis=1), rejections
+
+
+def bounced_only_hits(f, fs: float, rej: list, ip: int, extent, within: dict | None = None, *,
+                      threshold: float = 0.05, max_notch_db: float = BOUNCE_NOTCH_DB):
+    """The double hits of a point that has no other hit, usable with the force window over every blow.
+
+    A hit is rejected as a double hit because the second blow notches its force spectrum:
+    |F(f)| = |F₁(f)| |1 + a e^{−2πifΔt}| (a second blow of relative size a after Δt), so H1
+    loses precision at the notches (its noise grows by 1/|1 − a| at worst) — not accuracy:
+    the structure is linear, and H1 = Y/F holds for any force the window keeps whole. With
+    several hits per point the clean ones are enough; a point whose every hit bounced
+    (one hit per point, a bouncy surface) would be lost, leaving the grid with a gap that
+    leaks every order into the others (docs/lsce.md). Such a point's hits, each rejected for
+    a bounce and nothing else, are used when the notch is no deeper than ``max_notch_db``:
+
+    * a bounce after the pulse (:func:`~tiremodal_cli.frf.hits.double_hit`): below the first
+      blow's own spectrum (the record windowed to it alone), over the lines where that blow
+      is within ``max_notch_db`` of its peak (the band the hit excites); the force window
+      then runs to the end of the last blow (the same rule: from the start, the extent × 2);
+    * a bounce within the pulse (:func:`test_wide_checks`, ``within``: hit → depth): the
+      notch below the test's median blow shape, (1 − a)/(1 + a) — deeper than 1 − a, so
+      the rule is the stricter for it; the pulse's extent already spans that bounce (that is
+      why the check after the pulse did not see it), and so does the window.
+
+    Parameters
+    ----------
+    f : (n_hits, n_samples) ndarray, N        the point's force records
+    fs : float, Hz
+    rej : list of Rejection                   the point's rejections so far
+    ip : int                                  the point's index
+    extent : (start, stop) of (n_hits,) int   the first blows' :func:`pulse_extent`
+    within : dict, optional                   hit → notch depth (a ratio) of the bounces within the pulse
+
+    Returns
+    -------
+    use : (k,) ndarray of int                  the hits to use (empty: none)
+    stop : (n_hits,) ndarray of int            the extent's stops moved past the last blow
+    notes : list of dict                       point, hit, kind, notch_db (and delay_s, relative_size)
+    """
+    within = within or {}
+    reasons: dict[int, list] = {}
+    for r in rej:
+        if r.point == ip and r.hit is not None:
+            reasons.setdefault(r.hit, []).append(r.reason)
+    after = [h for h, why in reasons.items() if why == ["double hit"]]
+    inside = [h for h, why in reasons.items() if h in within and len(why) == 1 and why[0].startswith("double hit (")]
+    if extent is None or len(reasons) < f.shape[0] or not (after or inside):
+        return np.zeros(0, dtype=int), None if extent is None else extent[1], []
+    start, stop = (np.asarray(x).copy() for x in extent)
+    use, notes = [], []
+    for h in sorted(after + inside):
+        note = _bounce_after(np.asarray(f[h], dtype=float), fs, int(start[h]), int(stop[h]), threshold,
+                             max_notch_db)
+        if h in inside:  # its depth from the test's blows; the window still to any tail of its sign
+            note = {"kind": "within the pulse", "notch_db": float(20 * np.log10(max(within[h], 1e-12))),
+                    **({"end": note["end"]} if note else {})}
+        if note is None or note["notch_db"] < -max_notch_db:
+            continue
+        note.update(point=int(ip), hit=int(h))
+        stop[h] = note.pop("end", stop[h])
+        use.append(h)
+        notes.append(note)
+        log.warning("point %d: its only hit %d bounced %s (force notch %.1f dB); used, the force window over "
+                    "every blow", ip + 1, h + 1, note["kind"], note["notch_db"])
+    return np.asarray(use, dtype=int), stop, notes
+
+
+def _bounce_after(rec, fs: float, start: int, stop: int, threshold: float, max_notch_db: float) -> dict | None:
+    """A bounce after the pulse read from the record: its delay, size and notch, and where the last blow ends."""
+    ipk = start + int(np.argmax(np.abs(rec[start:stop])))
+    sign, lim = np.sign(rec[ipk]), threshold * abs(rec[ipk])
+    tail = np.flatnonzero(sign * rec[stop:] >= lim)
+    if not tail.size:
+        return None
+    onset, last = stop + int(tail[0]), stop + int(tail[-1]) + 1
+    quiet = np.flatnonzero(np.abs(rec[last:]) < lim)
+    end = last + (int(quiet[0]) if quiet.size else 0)
+    second = stop + int(np.argmax(sign * rec[stop:end]))
+    alone = min(2 * (stop - start), onset - start + 1) / fs  # the first blow alone
+    one = np.abs(scipy.fft.rfft(rec * force_window(rec[None], fs, length_s=alone,
+                                                   extent=(np.array([start]), np.array([stop])))[0]))
+    both = np.abs(scipy.fft.rfft(rec * force_window(rec[None], fs, extent=(np.array([start]), np.array([end])))[0]))
+    lines = one >= one.max() * 10 ** (-max_notch_db / 20)
+    return {"kind": f"after the pulse ({sign * rec[second] / abs(rec[ipk]):.2f} of it, {1e3 * (second - ipk) / fs:.1f} "
+                    "ms later)", "delay_s": float((second - ipk) / fs),
+            "relative_size": float(sign * rec[second] / abs(rec[ipk])),
+            "notch_db": float(20 * np.log10(np.min(both[lines] / one[lines]))), "end": end}
