@@ -316,8 +316,8 @@ def _point(m, ip: int, plan: _Plan, opt: FRFOptions, bounced):
             bad[h] = True
     acc, used = np.flatnonzero(~bad), []
     if not acc.size and opt.check_hits:
-        acc, stop, used = bounced_only_hits(f, plan.fs, rej, ip, extent, {h: d for h, _, d in bounced})
-        extent, rej = (extent[0], stop) if acc.size else extent, [r for r in rej if r.hit not in set(acc.tolist())]
+        acc, later, used = bounced_only_hits(f, plan.fs, rej, ip, extent, {h: d for h, _, d in bounced})
+        extent, rej = (*extent, *later) if acc.size else extent, [r for r in rej if r.hit not in set(acc.tolist())]
     if not acc.size:
         return rej, 0, peaks, None, used
     a, p, e = _hit_products(f, y, acc, extent, plan, opt)
@@ -335,13 +335,14 @@ def _hit_products(f, y, acc, extent, plan: _Plan, opt: FRFOptions):
     """The accepted hits windowed and transformed: per-hit conj(F) Y (n_acc, n_channels, n_band),
     |F|² (n_acc, 1, n_band) and |Y|² (n_acc, n_channels, n_band), shared by check and estimate."""
     if extent is not None and opt.force_window_s is None:
-        extent = (extent[0][acc], extent[1][acc])
+        extent = tuple(e[acc] for e in extent)  # (start, stop[, the later blows' start, stop])
     else:
         extent = None
     if acc.size < f.shape[0]:
         f, y = f[acc], y[acc]
     if opt.force_window:
-        f = f * force_window(f, plan.fs, length_s=opt.force_window_s, taper_s=opt.taper_s, extent=extent)
+        f = f * force_window(f, plan.fs, length_s=opt.force_window_s, taper_s=opt.taper_s,
+                             extent=extent and extent[:2], also=(extent or ())[2:] or None)
     if plan.exp_w is not None:
         f = f * plan.exp_w
         y = y * plan.exp_w

@@ -192,23 +192,21 @@ def bounced_only_hits(f, fs: float, rej: list, ip: int, extent, within: dict | N
                       threshold: float = 0.05, max_notch_db: float = BOUNCE_NOTCH_DB):
     """The double hits of a point that has no other hit, usable with the force window over every blow.
 
-    A hit is rejected as a double hit because the second blow notches its force spectrum:
-    |F(f)| = |F₁(f)| |1 + a e^{−2πifΔt}| (a second blow of relative size a after Δt), so H1
-    loses precision at the notches (its noise grows by 1/|1 − a| at worst) — not accuracy:
-    the structure is linear, and H1 = Y/F holds for any force the window keeps whole. With
-    several hits per point the clean ones are enough; a point whose every hit bounced
-    (one hit per point, a bouncy surface) would be lost, leaving the grid with a gap that
-    leaks every order into the others (docs/lsce.md). Such a point's hits, each rejected for
-    a bounce and nothing else, are used when the notch is no deeper than ``max_notch_db``:
+    A second blow of relative size a after Δt notches the force spectrum, |F| = |F₁| |1 + a
+    e^{−2πifΔt}|: H1 loses precision there (noise × 1/|1 − a| at worst), not accuracy — the
+    structure is linear, H1 = Y/F holds for any force the window keeps whole. A point whose
+    every hit bounced would be lost, a gap that leaks every order into the others
+    (docs/frf.md). Its hits, each rejected for a bounce and nothing else, are used when the
+    notch is no deeper than ``max_notch_db``:
 
     * a bounce after the pulse (:func:`~tiremodal_cli.frf.hits.double_hit`): below the first
       blow's own spectrum (the record windowed to it alone), over the lines where that blow
       is within ``max_notch_db`` of its peak (the band the hit excites); the force window
-      then runs to the end of the last blow (the same rule: from the start, the extent × 2);
+      then adds a window of the later blow (the same rule, from its onset above the pulse
+      threshold to its end, × 2): the noise between the blows stays out;
     * a bounce within the pulse (:func:`test_wide_checks`, ``within``: hit → depth): the
-      notch below the test's median blow shape, (1 − a)/(1 + a) — deeper than 1 − a, so
-      the rule is the stricter for it; the pulse's extent already spans that bounce (that is
-      why the check after the pulse did not see it), and so does the window.
+      notch below the test's median blow, (1 − a)/(1 + a), deeper than 1 − a: the stricter;
+      the pulse's extent (and so the window) already spans that bounce.
 
     Parameters
     ----------
@@ -222,35 +220,34 @@ def bounced_only_hits(f, fs: float, rej: list, ip: int, extent, within: dict | N
     Returns
     -------
     use : (k,) ndarray of int                  the hits to use (empty: none)
-    stop : (n_hits,) ndarray of int            the extent's stops moved past the last blow
+    later : (start, stop) of (n_hits,) int     each hit's later blow, for the force window's ``also``
     notes : list of dict                       point, hit, kind, notch_db (and delay_s, relative_size)
     """
-    within = within or {}
-    reasons: dict[int, list] = {}
-    for r in rej:
-        if r.point == ip and r.hit is not None:
-            reasons.setdefault(r.hit, []).append(r.reason)
+    within, reasons = within or {}, {}
+    for r in (r for r in rej if r.point == ip and r.hit is not None):
+        reasons.setdefault(r.hit, []).append(r.reason)
     after = [h for h, why in reasons.items() if why == ["double hit"]]
     inside = [h for h, why in reasons.items() if h in within and len(why) == 1 and why[0].startswith("double hit (")]
     if extent is None or len(reasons) < f.shape[0] or not (after or inside):
-        return np.zeros(0, dtype=int), None if extent is None else extent[1], []
-    start, stop = (np.asarray(x).copy() for x in extent)
+        return np.zeros(0, dtype=int), None, []
+    start, stop = (np.asarray(x) for x in extent)
+    later = (start.copy(), stop.copy())  # each hit's later blow (its first again: none)
     use, notes = [], []
     for h in sorted(after + inside):
         note = _bounce_after(np.asarray(f[h], dtype=float), fs, int(start[h]), int(stop[h]), threshold,
                              max_notch_db)
         if h in inside:  # its depth from the test's blows; the window still to any tail of its sign
             note = {"kind": "within the pulse", "notch_db": float(20 * np.log10(max(within[h], 1e-12))),
-                    **({"end": note["end"]} if note else {})}
+                    **({"blow": note["blow"]} if note else {})}
         if note is None or note["notch_db"] < -max_notch_db:
             continue
         note.update(point=int(ip), hit=int(h))
-        stop[h] = note.pop("end", stop[h])
+        later[0][h], later[1][h] = note.pop("blow", (start[h], stop[h]))
         use.append(h)
         notes.append(note)
         log.warning("point %d: its only hit %d bounced %s (force notch %.1f dB); used, the force window over "
                     "every blow", ip + 1, h + 1, note["kind"], note["notch_db"])
-    return np.asarray(use, dtype=int), stop, notes
+    return np.asarray(use, dtype=int), later, notes
 
 
 def _bounce_after(rec, fs: float, start: int, stop: int, threshold: float, max_notch_db: float) -> dict | None:
@@ -267,9 +264,10 @@ def _bounce_after(rec, fs: float, start: int, stop: int, threshold: float, max_n
     alone = min(2 * (stop - start), onset - start + 1) / fs  # the first blow alone
     one = np.abs(scipy.fft.rfft(rec * force_window(rec[None], fs, length_s=alone,
                                                    extent=(np.array([start]), np.array([stop])))[0]))
-    both = np.abs(scipy.fft.rfft(rec * force_window(rec[None], fs, extent=(np.array([start]), np.array([end])))[0]))
+    both = np.abs(scipy.fft.rfft(rec * force_window(rec[None], fs, extent=(np.array([start]), np.array([stop])),
+                                                    also=(np.array([onset]), np.array([end])))[0]))
     lines = one >= one.max() * 10 ** (-max_notch_db / 20)
     return {"kind": f"after the pulse ({sign * rec[second] / abs(rec[ipk]):.2f} of it, {1e3 * (second - ipk) / fs:.1f} "
                     "ms later)", "delay_s": float((second - ipk) / fs),
             "relative_size": float(sign * rec[second] / abs(rec[ipk])),
-            "notch_db": float(20 * np.log10(np.min(both[lines] / one[lines]))), "end": end}
+            "notch_db": float(20 * np.log10(np.min(both[lines] / one[lines]))), "blow": (onset, end)}

@@ -19,7 +19,7 @@ __all__ = ["force_window", "exponential_window", "correct_damping", "correct_pol
 
 
 def force_window(force, fs: float, *, length_s: float | None = None, taper_s: float | None = None,
-                 threshold: float = 0.05, extent=None) -> np.ndarray:
+                 threshold: float = 0.05, extent=None, also=None) -> np.ndarray:
     """Force windows for a stack of records.
 
     Parameters
@@ -34,6 +34,10 @@ def force_window(force, fs: float, *, length_s: float | None = None, taper_s: fl
         Length of each cosine taper, s (default: 4 samples).
     extent : (start, stop), optional
         :func:`~tiremodal_cli.frf.hits.pulse_extent` of the records, if the caller has it.
+    also : (start, stop), optional
+        A later blow of each record (a bounce kept, :func:`~tiremodal_cli.frf.screening.bounced_only_hits`):
+        its own window, by the same rule, is added (the union of the two; the samples between
+        the blows, noise only, stay out).
 
     Returns
     -------
@@ -60,6 +64,8 @@ def force_window(force, fs: float, *, length_s: float | None = None, taper_s: fl
         flat[i, lo:a] = rise[taper - (a - lo):]
         hi = min(b + taper, n)
         flat[i, b:hi] = fall[:hi - b]
+    if also is not None:
+        w = np.maximum(w, force_window(f, fs, length_s=length_s, taper_s=taper_s, threshold=threshold, extent=also))
     return w
 
 

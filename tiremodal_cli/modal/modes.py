@@ -24,7 +24,8 @@ from tiremodal_cli.modal.gaps import cleaned_groups, weak_in_frfs
 from tiremodal_cli.modal.groupfit import GroupData, fit_clusters, row_visibility
 from tiremodal_cli.modal.joint import add_missing_orders
 from tiremodal_cli.modal.refine import dropped_poles, refine_adopted
-from tiremodal_cli.modal.point_order import angle_order, frf_points_taken, stored_order
+from tiremodal_cli.modal.point_order import (angle_order, frf_points_taken, result_points_taken, stored_order,
+                                             table_points_taken)
 from tiremodal_cli.modal.guard import guarded_diagram
 from tiremodal_cli.modal.lsce import bridge, poles_to_modal, principal_responses, sweep, sweep_poly
 from tiremodal_cli.modal.lsfd import mpc
@@ -34,7 +35,8 @@ from tiremodal_cli.modal.misreads import without_misreads
 from tiremodal_cli.modal.options import ModalOptions
 from tiremodal_cli.modal.plscf import sweep_plscf
 from tiremodal_cli.modal.rescue import far_bands, unexplained_bands, with_rescued
-from tiremodal_cli.modal.spatial import decompose, grid_points, leakage
+from tiremodal_cli.modal.mirror import mirror_filled
+from tiremodal_cli.modal.spatial import decompose, grid_points, is_circumferential, leakage
 from tiremodal_cli.modal.stabilization import stabilize
 from tiremodal_cli.modal.symmetry import antisymmetric_share
 from tiremodal_cli.modal.table import table_from_result
@@ -79,17 +81,6 @@ class ModalResult:
     rejected: list = field(default_factory=list)
     meta: dict = field(default_factory=dict)
     frequency_std_hz: np.ndarray | None = None
-
-
-def is_circumferential(point_angle, channel_location) -> bool:
-    """True when the points go round the tread (≥ 8 distinct angles spanning > 270°) and a
-    tread channel exists: the data of a tyre test."""
-    a = np.mod(np.asarray(point_angle, dtype=float), 2 * np.pi)
-    if a.size < 8 or "tread" not in tuple(channel_location) or not np.all(np.isfinite(a)):
-        return False
-    a = np.sort(a)  # the points may be stored from any origin, in either direction
-    gaps = np.diff(np.concatenate([a, a[:1] + 2 * np.pi]))
-    return len(np.unique(np.round(a, 9))) >= 8 and gaps.max() < np.pi / 2
 
 
 def estimate_modes(freq_hz, H, **kwargs) -> "ModalResult":
@@ -376,6 +367,8 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
         table.meta["confirmed"] = confirmed(res, res2).tolist()
         return table, res
 
+    r, measured, mirrored = (mirror_filled(r, opt.band_hz) if is_circumferential(r.point_angle, r.channel_location)
+                             else (r, None, None))
     res = estimate_modes(r.freq_hz, r.H, point_angle=r.point_angle, channel_location=r.channel_location,
                          form=r.form, exp_tau_s=r.exp_tau_s, opt=opt, progress=progress, channel_angle=r.channel_angle)
     res.meta["band_reason"] = why
@@ -396,4 +389,8 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
     table = table_from_result(res, classes, point_angle=r.point_angle, point_index=r.point_index,
                               channel_name=r.channel_name, channel_location=r.channel_location,
                               channel_angle=r.channel_angle, form=r.form)
+    if mirrored is not None:  # the points filled from their mirror images out again (modal.mirror)
+        table.meta["mirrored_points"] = mirrored
+        if measured is not None:
+            table, res = table_points_taken(table, measured), result_points_taken(res, measured)
     return table, res

@@ -16,7 +16,8 @@ import numpy as np
 
 from tiremodal_cli.errors import DataFormatError
 
-__all__ = ["harmonic_design", "max_order", "grid_points", "grid_design", "decompose", "leakage"]
+__all__ = ["harmonic_design", "max_order", "grid_points", "grid_design", "decompose", "leakage",
+           "is_circumferential"]
 
 #: how far (in grid steps) an angle may lie from its grid node: angles stored in single
 #: precision (≈ 1e-7 rad) on grids of up to a few hundred points are far inside it
@@ -156,3 +157,14 @@ def leakage(angles_rad) -> dict[tuple[int, int], float]:
             if n != m:
                 out[(n, m)] = float(np.linalg.norm(P[cols[n]] @ D[:, cols[m]], 2) / s_min) if s_min > 0 else np.inf
     return out
+
+
+def is_circumferential(point_angle, channel_location) -> bool:
+    """True when the points go round the tread (≥ 8 distinct angles spanning > 270°) and a
+    tread channel exists: the data of a tyre test."""
+    a = np.mod(np.asarray(point_angle, dtype=float), 2 * np.pi)
+    if a.size < 8 or "tread" not in tuple(channel_location) or not np.all(np.isfinite(a)):
+        return False
+    a = np.sort(a)  # the points may be stored from any origin, in either direction
+    gaps = np.diff(np.concatenate([a, a[:1] + 2 * np.pi]))
+    return len(np.unique(np.round(a, 9))) >= 8 and gaps.max() < np.pi / 2
