@@ -125,4 +125,3 @@ def test_weak_poles_pinned_apart_are_two_modes(change, n_modes):
     other = dict(f_hz=284.67, group=8, std_hz=0.21) | change
     merged = merge_groups([_group_mode(280.16, 7, 0.15), _group_mode(**other)], line_hz=0.5)
     assert len(merged) == n_modes
-
