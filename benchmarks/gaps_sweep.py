@@ -10,7 +10,10 @@ does, and k of its points dropped (seeded, the same k-subsets for every build) b
 modal stage (``run``'s options and band). The table is scored by the validation ruler
 (``workflow/validation_scoring.py``) against the generator's truth for the full grid: a
 grid with gaps is judged by what the complete grid would show. Prints one line per
-(seed, k): expected, found, mislabelled, missed, spurious / adopted, seconds.
+(seed, k, path) — each test through the modal stage as ``run`` does it (``mirror``) and with
+the sensors' angles withheld (``gappy``, the baseline: the gaps kept) — expected, found,
+mislabelled, missed, spurious / adopted, seconds; then the totals of each path and the ratio
+of their times.
 
 Why: a point whose every hit is rejected leaves a gap, and with one hit per point that is a
 fifth of the points when a fifth of the hits bounce; since session 22 the bounced hits are
@@ -52,7 +55,11 @@ def rows_of(table) -> list[dict]:
     return out
 
 
-def one(case, k: int, rng_seed: int, drop=None) -> dict:
+def one(case, k: int, rng_seed: int, drop=None) -> list[dict]:
+    """One test with k points left out, through the modal stage twice: as ``run`` does it
+    (``mirror``: a missing point read from its mirror image when the test shows the
+    symmetry, modal.mirror) and with the sensors' angles withheld (``gappy``: the gaps kept,
+    the gappy-grid path — the baseline, and what ran before session 22)."""
     cfg = config_for(case)
     sim = simulate(cfg)
     opt = RunOptions()
@@ -65,34 +72,51 @@ def one(case, k: int, rng_seed: int, drop=None) -> dict:
     r = dataclasses.replace(r, H=r.H[:, keep], coherence=r.coherence[:, keep], n_averages=r.n_averages[keep],
                             point_index=r.point_index[keep], point_angle=r.point_angle[keep],
                             force_autospectrum=None if r.force_autospectrum is None else r.force_autospectrum[keep])
-    t = time.perf_counter()
-    table, _ = modal_table_from_frf(r, ModalOptions(order_within_band=True))
-    sc = score_modes(expected_groups(sim, cfg), rows_of(table), sim.truth["modes"])
-    return {"case": case.name, "seed": case.seed, "missing": int(k), "dropped": [int(i) for i in drop],
-            **{x: sc[x] for x in ("expected", "found", "mislabelled", "missed", "spurious", "adopted")},
-            "seconds": round(time.perf_counter() - t, 1),
-            "not_found": [d for d in sc["detail"] if d["status"] != "found"]}
+    groups = expected_groups(sim, cfg)
+    out = []
+    for path, rr in (("mirror", r), ("gappy", dataclasses.replace(r, channel_angle=None))):
+        t = time.perf_counter()
+        table, _ = modal_table_from_frf(rr, ModalOptions(order_within_band=True))
+        sc = score_modes(groups, rows_of(table), sim.truth["modes"])
+        out.append({"case": case.name, "seed": case.seed, "missing": int(k), "dropped": [int(i) for i in drop],
+                    "path": path, **{x: sc[x] for x in ("expected", "found", "mislabelled", "missed", "spurious",
+                                                        "adopted")},
+                    "seconds": round(time.perf_counter() - t, 2),
+                    "not_found": [d for d in sc["detail"] if d["status"] != "found"]})
+    return out
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", default=CASE)
-    ap.add_argument("--missing", type=int, nargs="+", default=[0, 1, 2, 5])
+    ap.add_argument("--missing", type=int, nargs="+", default=[1, 2, 3, 5])
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1000, 2000, 3000], help="offsets of the case's seed")
     ap.add_argument("--drop", type=int, nargs="+", help="these points (0-based) instead of --missing's random ones")
     ap.add_argument("--out", type=Path)
     a = ap.parse_args(argv)
     base = dataclasses.replace(next(c for c in matrix() if c.name == a.case), faults="none")  # its gaps are ours
+    every = []
     for off in a.seeds:
         case = dataclasses.replace(base, seed=base.seed + off)
         for k in ([len(a.drop)] if a.drop else a.missing):
-            rec = one(case, k, 7919 * (off + 1) + k, a.drop)
-            print(f"seed +{off:<5} missing {k:2d} {rec['dropped']}: found {rec['found']}/{rec['expected']}, "
-                  f"mislabelled {rec['mislabelled']}, missed {rec['missed']}, spurious {rec['spurious']}/"
-                  f"{rec['adopted']} ({rec['seconds']} s)", flush=True)
-            if a.out:
-                with open(a.out, "a", encoding="utf-8") as fh:
-                    fh.write(json.dumps(rec) + "\n")
+            recs = one(case, k, 7919 * (off + 1) + k, a.drop)
+            for rec in recs:
+                print(f"seed +{off:<5} missing {k:2d} {rec['dropped']} {rec['path']:6s}: found {rec['found']}/"
+                      f"{rec['expected']}, mislabelled {rec['mislabelled']}, missed {rec['missed']}, spurious "
+                      f"{rec['spurious']}/{rec['adopted']} ({rec['seconds']} s)", flush=True)
+                if a.out:
+                    with open(a.out, "a", encoding="utf-8") as fh:
+                        fh.write(json.dumps(rec) + "\n")
+            every += recs
+    print("\ntotals (path: found / expected, mislabelled, spurious / adopted, tests over 5 % spurious, seconds)")
+    tot = {}
+    for path in ("mirror", "gappy"):
+        R = [x for x in every if x["path"] == path]
+        tot[path] = sum(x["seconds"] for x in R)
+        print(f"  {path:6s}: {sum(x['found'] for x in R)} / {sum(x['expected'] for x in R)}, "
+              f"{sum(x['mislabelled'] for x in R)}, {sum(x['spurious'] for x in R)} / {sum(x['adopted'] for x in R)}, "
+              f"{sum(x['spurious'] > 0.05 * x['adopted'] for x in R)} of {len(R)}, {tot[path]:.1f} s")
+    print(f"  modal stage time, gappy / mirror: {tot['gappy'] / max(tot['mirror'], 1e-9):.1f} ×")
     return 0
 
 
