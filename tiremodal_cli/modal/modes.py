@@ -142,15 +142,15 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     groups, group_max, opt = _order_groups(band, point_angle, spatial, opt)
     gaps = spatial and grid_points(point_angle) > len(point_angle)  # points missing: every order leaks
     share = (antisymmetric_share(band.freq, band.Hb, point_angle, np.asarray(channel_angle)[band.live], exp_tau_s)
-             if spatial and not gaps and channel_angle is not None and point_angle is not None else None)
+             if spatial and channel_angle is not None and point_angle is not None else None)
+    ortho = share is not None and share < COPY_MAX_AMPLITUDE  # (with gaps: the ones no mirror image filled)
     diagrams, modes, rejected, synth, kept = _modes_of_groups(band, groups, point_angle, spatial, gaps, group_max,
-                                                              opt, progress, share is not None
-                                                              and share < COPY_MAX_AMPLITUDE)
+                                                              opt, progress, ortho)
     if gaps:  # once more, each group read with the found modes' leaks taken out (modal.gaps)
         groups = cleaned_groups(band.freq, band.Hb, point_angle, [m.pole for m in modes],
                                 [set(m.order_energy) for m in modes])
         diagrams, modes, rejected, synth, kept = _modes_of_groups(band, groups, point_angle, spatial, gaps,
-                                                                  group_max, opt, progress)
+                                                                  group_max, opt, progress, ortho)
     if gaps:  # the branches' unfound orders, refined jointly with the modes found (modal.joint)
         locs = [tuple(channel_location)[i] for i in np.flatnonzero(band.live)] if len(channel_location) else []
         modes, synth, proposed = add_missing_orders(band.freq, band.Hb, point_angle, locs, modes, synth)
@@ -199,7 +199,7 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
         found, copies = leak_copies(found, leakage(point_angle))
         rejected += copies
     modes = merge_groups(found, line_hz=band.freq[1] - band.freq[0], min_significance=opt.min_significance,
-                         orthogonal=orthogonal)
+                         orthogonal=orthogonal, leak=leakage(point_angle) if gaps else None)
     if not gaps:  # (with gaps: leak_copies only)
         modes, unseen = under_residual(modes, band.freq[1] - band.freq[0], band.Hb.shape[0], opt.min_significance)
         rejected += unseen
