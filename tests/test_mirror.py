@@ -84,3 +84,14 @@ def test_failed_points_read_from_their_mirrors_give_every_expected_mode(failed_p
     sc = score_modes(expected_groups(sim, config_for(failed_points_case)), rows_of(table), sim.truth["modes"])
     assert sc["found"] == sc["expected"] == 65, [d for d in sc["detail"] if d["status"] != "found"]
     assert sc["spurious"] <= 0.05 * sc["adopted"]
+
+
+def test_a_sensor_whose_angle_is_unknown_fills_nothing(failed_points_case):
+    """One channel's angle not known (NaN, as a UFF response without geometry gives): the
+    other channels show the symmetry, but that channel has no mirror image, so no point is
+    filled — and nothing fails."""
+    _, r = _test_without(failed_points_case, [5])
+    ang = np.array(r.channel_angle, dtype=float)
+    ang[1] = np.nan
+    full, measured, info = mirror_filled(dataclasses.replace(r, channel_angle=ang), (0.5, 1000.0))
+    assert measured is None and info["filled"] == [] and info["gaps_deg"] == [75.0]

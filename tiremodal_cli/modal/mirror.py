@@ -35,7 +35,10 @@ __all__ = ["mirror_filled"]
 
 
 def _grid_index(angle: float, first: float, n_grid: int) -> int | None:
-    """The grid node (0 … n_grid − 1, counted from ``first``) an angle lies on, or None."""
+    """The grid node (0 … n_grid − 1, counted from ``first``) an angle lies on, or None (also
+    for an angle not known: a UFF file's response without geometry has NaN)."""
+    if not np.isfinite(angle):
+        return None
     x = (angle - first) / (2 * np.pi) * n_grid
     k = int(np.round(x))
     return k % n_grid if abs(x - k) <= GRID_TOL_STEPS else None
