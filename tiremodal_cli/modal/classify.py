@@ -94,7 +94,7 @@ def order_energy(shape_over_points, angles_rad) -> dict[int, float]:
 
 
 def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
-             damping_ratio=None, significance_group=None, group=None) -> list[Classification]:
+             damping_ratio=None, significance_group=None, group=None, mixed: bool = False) -> list[Classification]:
     """Classify every mode.
 
     Parameters
@@ -111,6 +111,9 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     group : (n_modes,) int array, optional — the order group each mode's pole was estimated
         in; on a grid with missing points a spatial reading that disagrees with it is read
         at the group's order (:func:`_read`)
+    mixed : bool — the test's orders mix (:mod:`~tiremodal_cli.modal.mixing`: a lumped mass):
+        a merged mode's shape sums its copies' shares of other groups, and it is read at the
+        group its pole was estimated in, as on a grid with missing points
 
     Returns
     -------
@@ -121,7 +124,7 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     isw = locs.index("sidewall") if "sidewall" in locs else None
     n_p = grid_points(point_angle)  # points failed on a uniform grid alias as the whole grid
     gappy = n_p > len(point_angle)
-    reads = [_read(shapes[r], it, isw, point_angle, int(group[r]) if gappy and group is not None else None)
+    reads = [_read(shapes[r], it, isw, point_angle, int(group[r]) if (gappy or mixed) and group is not None else None)
              for r in range(len(freq_hz))]
     free_rim = _free_rim(shapes, locs)
     ns = resolve_aliases(BranchModes(freq_hz, reads, n_p, significance, significance_group, free_rim,

@@ -33,9 +33,10 @@ from tiremodal_cli.modal.leaks import leak_copies, under_residual
 from tiremodal_cli.modal.merge import COPY_MAX_AMPLITUDE, GroupMode, merge_groups, off_edges, swap_cost
 from tiremodal_cli.modal.misreads import without_misreads
 from tiremodal_cli.modal.options import ModalOptions
-from tiremodal_cli.modal.plscf import sweep_plscf
+from tiremodal_cli.modal.plscf import confirmed, sweep_plscf
 from tiremodal_cli.modal.rescue import far_bands, unexplained_bands, with_rescued
 from tiremodal_cli.modal.mirror import mirror_filled
+from tiremodal_cli.modal.mixing import order_mixing
 from tiremodal_cli.modal.spatial import decompose, grid_points, is_circumferential, leakage
 from tiremodal_cli.modal.stabilization import stabilize
 from tiremodal_cli.modal.symmetry import antisymmetric_share
@@ -144,13 +145,14 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     share = (antisymmetric_share(band.freq, band.Hb, point_angle, np.asarray(channel_angle)[band.live], exp_tau_s)
              if spatial and channel_angle is not None and point_angle is not None else None)
     ortho = share is not None and share < COPY_MAX_AMPLITUDE  # (with gaps: the ones no mirror image filled)
-    diagrams, modes, rejected, synth, kept = _modes_of_groups(band, groups, point_angle, spatial, gaps, group_max,
-                                                              opt, progress, ortho)
+    live_angles = () if channel_angle is None else np.asarray(channel_angle, dtype=float)[band.live]
+    diagrams, modes, rejected, synth, kept, mixing = _modes_of_groups(band, groups, point_angle, spatial, gaps,
+                                                                      group_max, opt, progress, ortho, live_angles)
     if gaps:  # once more, each group read with the found modes' leaks taken out (modal.gaps)
         groups = cleaned_groups(band.freq, band.Hb, point_angle, [m.pole for m in modes],
                                 [set(m.order_energy) for m in modes])
-        diagrams, modes, rejected, synth, kept = _modes_of_groups(band, groups, point_angle, spatial, gaps,
-                                                                  group_max, opt, progress, ortho)
+        diagrams, modes, rejected, synth, kept, mixing = _modes_of_groups(band, groups, point_angle, spatial, gaps,
+                                                                          group_max, opt, progress, ortho, live_angles)
     if gaps:  # the branches' unfound orders, refined jointly with the modes found (modal.joint)
         locs = [tuple(channel_location)[i] for i in np.flatnonzero(band.live)] if len(channel_location) else []
         modes, synth, proposed = add_missing_orders(band.freq, band.Hb, point_angle, locs, modes, synth)
@@ -162,19 +164,21 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     if opt.refine:  # the poles near the band's edges (docs/lsce.md, "Pole refinement")
         modes = refine_adopted(modes, {g: k for g, k in kept.items() if k is not None}, synth)
     meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
-            "max_order": int(group_max), "exp_tau_s": exp_tau_s, "antisymmetric_share": share}
+            "max_order": int(group_max), "exp_tau_s": exp_tau_s, "antisymmetric_share": share,
+            "order_mixing": mixing}
     return _result(band, H.shape, modes, synth, exp_tau_s, diagrams=diagrams, rejected=rejected + edge, meta=meta)
 
 
 def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool, group_max: int,
-                     opt: ModalOptions, progress, orthogonal: bool = False):
+                     opt: ModalOptions, progress, orthogonal: bool = False, channel_angle=()):
     """Every order group swept and fitted, and their modes merged into one per physical pole
     (``orthogonal``: a complete grid of a structure symmetric about its sensors, merge_groups);
     a group whose fit left a peak that no group's pole reaches, on a complete grid, fitted
     again with the sweep at twice its order there (:mod:`~tiremodal_cli.modal.rescue`).
 
     Returns (diagrams, modes (MergedMode), rejected, the physical synthesis (n_frf, K), each
-    group's kept fit ({group: kept or None}, for the pole refinement))."""
+    group's kept fit ({group: kept or None}, for the pole refinement), the order-mixing test
+    (:func:`~tiremodal_cli.modal.mixing.order_mixing`; None: not run))."""
     diagrams, found, rejected, kept, out = [], [], [], {}, {}
     synth = np.zeros(band.flat.shape, dtype=complex)
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
@@ -198,12 +202,16 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
     if gaps:
         found, copies = leak_copies(found, leakage(point_angle))
         rejected += copies
+    mixing = (order_mixing(band.freq, {g: d.rows for g, (d, _) in out.items()},
+                           [(m.group, m.pole, m.significance) for m in found], channel_angle)
+              if orthogonal and not gaps else None)
+    orthogonal = orthogonal and not (mixing and mixing["mixed"])  # a lumped mass on the sensors' plane (modal.mixing)
     modes = merge_groups(found, line_hz=band.freq[1] - band.freq[0], min_significance=opt.min_significance,
                          orthogonal=orthogonal, leak=leakage(point_angle) if gaps else None)
     if not gaps:  # (with gaps: leak_copies only)
         modes, unseen = under_residual(modes, band.freq[1] - band.freq[0], band.Hb.shape[0], opt.min_significance)
         rejected += unseen
-    return diagrams, modes, rejected, synth, kept
+    return diagrams, modes, rejected, synth, kept, mixing
 
 
 def _band_frfs(freq_hz, H, live, form: str, opt: ModalOptions) -> _Band:
@@ -326,17 +334,6 @@ def _result(band: _Band, shape, modes, synth, exp_tau_s, *, diagrams, rejected, 
                        frequency_std_hz=np.array([m.frequency_std_hz for m in modes]))
 
 
-def confirmed(a: "ModalResult", b: "ModalResult") -> np.ndarray:
-    """Which modes of ``a`` the estimate ``b`` confirms: a mode of b within a quarter of
-    a's half-power half-width (|Δf| ≤ ζ f / 4 — two modes that close cannot be told
-    apart, so the two estimators saw one mode) and with a damping ratio within 30 %."""
-    out = np.zeros(a.freq_hz.size, dtype=bool)
-    for i, (f, z) in enumerate(zip(a.freq_hz, a.damping_ratio)):
-        near = np.abs(b.freq_hz - f) <= 0.25 * z * f
-        out[i] = bool(np.any(near & (np.abs(b.damping_ratio - z) <= 0.3 * z)))
-    return out
-
-
 def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None):
     """The whole modal stage on an FRFResult: modes, and the tyre classification when the
     points go round a tread.
@@ -380,7 +377,7 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
         if "tread" in locs:
             res, classes = without_misreads(res, lambda m: classify(
                 m.freq_hz, m.shapes[:, live], r.point_angle, locs, m.significance, m.damping_ratio,
-                m.meta.get("significance_in_group"), m.group))
+                m.meta.get("significance_in_group"), m.group, mixed=bool((m.meta["order_mixing"] or {}).get("mixed"))))
             res.meta["crowds"] = [{"frequency_hz": float(res.freq_hz[i]), "n_spatial": c.n_spatial,
                                    "n_candidates": list(c.n_candidates),
                                    "reason": "orders aliasing onto one spatial order lie within one half-power "

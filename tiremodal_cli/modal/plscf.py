@@ -40,7 +40,7 @@ import scipy.linalg
 from tiremodal_cli.errors import ParameterError
 from tiremodal_cli.modal.lsce import OrderPoles, poles_to_modal
 
-__all__ = ["sweep_plscf"]
+__all__ = ["confirmed", "sweep_plscf"]
 
 
 def sweep_plscf(freq_hz, H, orders) -> list[OrderPoles]:
@@ -121,3 +121,15 @@ def _order_poles(R, S, T, p: int, n_ref: int, dt: float) -> OrderPoles:
     part = part / np.maximum(np.linalg.norm(part, axis=1, keepdims=True), np.finfo(float).tiny)
     fn, zeta = poles_to_modal(s)
     return OrderPoles(p, s, z, fn, zeta, part)
+
+
+def confirmed(a, b) -> np.ndarray:
+    """Which modes of ``a`` (a :class:`~tiremodal_cli.modal.modes.ModalResult`) the estimate
+    ``b`` (another, of the other method) confirms: a mode of b within a quarter of
+    a's half-power half-width (|Δf| ≤ ζ f / 4 — two modes that close cannot be told
+    apart, so the two estimators saw one mode) and with a damping ratio within 30 %."""
+    out = np.zeros(a.freq_hz.size, dtype=bool)
+    for i, (f, z) in enumerate(zip(a.freq_hz, a.damping_ratio)):
+        near = np.abs(b.freq_hz - f) <= 0.25 * z * f
+        out[i] = bool(np.any(near & (np.abs(b.damping_ratio - z) <= 0.3 * z)))
+    return out
