@@ -335,6 +335,22 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1289 / 1334 (97 %) | 9 | 4 / 1801 (0.2 %) | 0 | 14 / 14 | 0 |
 | seeds + 3000, session 22 | 10bb736 | paper | **1182** / 1212 (98 %) | 7 | 17 / 1626 (1.0 %) | 1: added mass 6 / 55 | **13 / 13** | 0 |
 | | | ring | **1295** / 1334 (97 %) | 6 | 8 / 1830 (0.4 %) | 0 | 13 / 14 (the sidewall coupling adopts nothing) | 0 |
+| seeds + 1000, session 23 (a lumped mass on the sensors' plane seen by the clear modes' symmetric copies in other order groups: the merge no longer treats the groups as orthogonal) | 3abcd29 | paper | 1184 / 1212 (98 %) | 8 | 10 / 1620 (0.6 %) | **0** | 13 / 13 | 0 |
+| | | ring | 1291 / 1334 (97 %) | 7 | 11 / 1839 (0.6 %) | 1: mass 4 / 65 | 13 / 14 (mass: air_cavity beside added_mass) | 0 |
+| seeds + 2000, session 23 | 3abcd29 | paper | 1183 / 1212 (98 %) | 7 | 12 / 1637 (0.7 %) | **0** (added mass 1 / 46) | 13 / 13 | 0 |
+| | | ring | 1289 / 1334 (97 %) | 9 | 4 / 1801 (0.2 %) | 0 | 14 / 14 | 0 |
+| seeds + 3000, session 23 | 3abcd29 | paper | 1182 / 1212 (98 %) | 7 | 13 / 1618 (0.8 %) | **0** (added mass 2 / 49) | 13 / 13 | 0 |
+| | | ring | 1295 / 1334 (97 %) | 6 | 8 / 1830 (0.4 %) | 0 | 13 / 14 (the sidewall coupling adopts nothing) | 0 |
+
+Session 23's held-out runs, case by case against session 22's: only the paper's two added-mass
+cases move (the order-mixing test, docs/lsce.md "Session 23", finds their mass on the sensors'
+plane at every seed; no other case reaches it). The added mass: + 1000 adopted 46 → 44 (spurious
+0 → 0), + 2000 spurious 3 → 1 of 46 (the two rows of the mass-mixed crowd at 158.8 and 161.7 Hz
+merged into their modes), + 3000 6 → 2 of 49 (the copies of the opposite n = 0 … 5 at 178–183 Hz
+merged); tangential + added mass: rows 47 → 43, 50 → 48, 48 → 46, found unchanged. Found totals
+unchanged at every seed; every diagnosis as before. The one case left over 5 % is the ring's
+mass at + 1000 (4 / 65: two biased members of split pairs, a row between two modes and a copy;
+its mass is off the sensors' plane, where the mirror test already sets the merge).
 
 Session 22's held-out runs, case by case against session 21's: only the two one-hit
 combinations with bounces and overloads move (every other record is the same). Their bounced
