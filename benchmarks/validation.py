@@ -458,6 +458,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1301 / 1334 (98 %) | 8 / 1822 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-27, end of session 22 | a point whose only hits bounced keeps them, the force window over every blow, while the notch stays within the 20 dB force rule (docs/frf.md); a missing point read from its mirror image about the sensors' plane when the test's mirrored points show the symmetry (modal.mirror); on the gaps no image fills, a pole above the leak bound a mode of its own; measured, not adopted: the noise tests in the poly-reference fit's norm (docs/lsce.md, "Session 22") | paper | 1188 / 1212 (98 %) | 7 / 1639 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 2.4 min |
 | | | ring | 1301 / 1334 (98 %) | 8 / 1835 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-28, end of session 23 | a lumped mass on the sensors' plane (the mirror test's blind spot) seen by the order mixing — the clear modes' copies in other order groups symmetric about that plane beyond their antisymmetric part (modal.mixing) — and the groups then not treated as orthogonal, a mixed mode read at its dominant group; held out, no paper case over 5 % spurious at any seed; measured, not adopted: poles of a symmetric grid kept apart when visible though not pinned (docs/lsce.md, "Session 23") | paper | 1188 / 1212 (98 %) | 7 / 1635 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 2.4 min |
+| | | ring | 1301 / 1334 (98 %) | 8 / 1835 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
