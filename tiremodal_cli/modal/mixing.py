@@ -125,10 +125,10 @@ def symmetric_copy_pvalue(jw, Y, lam_own, lam_k, phase) -> float | None:
     antisymmetric parts, each weighed by the channel's residual power; the ratio of their
     sums against F(2C, 2C). None when the window holds fewer lines than twice the columns
     or a channel's residual vanishes."""
-    cols = np.array([np.ones_like(jw), jw / jw.mean()] + [1 / (jw - s) for s in list(lam_own) + [lam_k]]).T
     n_w, n_r = Y.shape
-    if n_w < 2 * cols.shape[1]:
+    if n_w < 2 * (3 + len(lam_own)):
         return None
+    cols = np.array([np.ones_like(jw), jw / jw.mean()] + [1 / (jw - s) for s in list(lam_own) + [lam_k]]).T
     c = np.linalg.lstsq(cols, Y, rcond=None)[0]
     res = np.abs(Y - cols @ c) ** 2
     n_c = n_r // 2
