@@ -4,6 +4,7 @@
     python benchmarks/validation.py --jobs 2 --out results.jsonl
     python benchmarks/validation.py --only ring:reference --only paper:reference --no-docs
     python benchmarks/validation.py --jobs 2 --seed-offset 1000 --out held.jsonl   # other noise
+    python benchmarks/validation.py --jobs 2 --noise-scale 0.02 --out quiet.jsonl  # 50 × less noise
 
 Cases: tiremodal_cli/workflow/validation.py; scoring rules: workflow/validation_scoring.py
 (and docs/validation.md). Every case is seeded; the same commit on the same machine gives the same scorecard (timings aside).
@@ -341,6 +342,23 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1289 / 1334 (97 %) | 9 | 4 / 1801 (0.2 %) | 0 | 14 / 14 | 0 |
 | seeds + 3000, session 23 | 3abcd29 | paper | 1182 / 1212 (98 %) | 7 | 13 / 1618 (0.8 %) | **0** (added mass 2 / 49) | 13 / 13 | 0 |
 | | | ring | 1295 / 1334 (97 %) | 6 | 8 / 1830 (0.4 %) | 0 | 13 / 14 (the sidewall coupling adopts nothing) | 0 |
+| the matrix's seeds, every sensor's noise × 0.2 (0.1 % for the reference; `--noise-scale 0.2`), session 24 | 1ac395c | paper | 1191 / 1213 (98 %) | 5 | 14 / 1666 (0.8 %) | 1: tangential + added mass 4 / 49 | 13 / 13 | 0 |
+| | | ring | 1298 / 1337 (97 %) | 11 | 9 / 1884 (0.5 %) | 0 | **13 / 14** (sidewall shear: m_s for tangential); no-effect cases **13 / 14** (24 points: sidewall_membrane) | 0 |
+| the matrix's seeds, noise × 0.02 (0.01 %), session 24 | 1ac395c | paper | 1190 / 1213 (98 %) | 6 | 16 / 1682 (1.0 %) | 1: tangential + added mass 3 / 58 | **11 / 13** (added mass: rhoA; tangential + added mass: rhoA beside tangential); no-effect cases **13 / 14** (1,024 Hz: air_cavity) | 0 |
+| | | ring | 1299 / 1337 (97 %) | 12 | 18 / 1970 (0.9 %) | 1: reference 4 / 71 | 14 / 14 | 0 |
+
+Session 24's quieter runs: the same tests with every sensor's noise (force and responses) 5 ×
+and 50 × lower. Nothing the matrix misses is the noise's: the same weak same-direction modes
+are missed at 0.1 % and 0.01 % (paper missed 19 → 17 → 17, ring 24 → 28 → 26; the membrane's
+same n = 45, 46, 51, 54–56 and the sidewall coupling's n = 47, 59, 60, 64 at every level), and a quieter test is worse
+elsewhere — more rows adopted (ring 1835 → 1884 → 1970), spurious up (paper 7 → 14 → 16, ring
+8 → 9 → 18: copies of strong modes in other order groups at 0.1–0.5 half-widths, a crowd's
+strong modes placed 0.3 % off), and diagnoses go wrong (at 0.1 % the ring's 24 points adopt a
+false sidewall_membrane and its sidewall shear m_s for tangential; at 0.01 % the paper's added
+mass is read as rhoA, its 1,024 Hz case adopts a false air_cavity). The thresholds were measured
+at the matrix's noise (0.5–5 %); what scales with the noise in them, and what does not (a
+record's truncated decay, the points' gain errors, the model's own misfit), is the next thing to
+measure (docs/lsce.md, "Session 24").
 
 Session 23's held-out runs, case by case against session 22's: only the paper's two added-mass
 cases move (the order-mixing test, docs/lsce.md "Session 23", finds their mass on the sensors'
@@ -486,10 +504,18 @@ def main(argv=None) -> int:
                     help="add this to every case's seed: the same tests with noise, hits and faults the "
                          "matrix's own seeds never showed (a check on rules measured on the matrix; "
                          "docs/validation.md is not rewritten)")
+    ap.add_argument("--noise-scale", type=float, default=1.0,
+                    help="multiply every case's sensor noise by this (> 0): whether what the matrix misses is "
+                         "the noise's (the ruler's visibility follows the noise; docs/validation.md is not "
+                         "rewritten)")
     args = ap.parse_args(argv)
+    if not args.noise_scale > 0:
+        ap.error(f"--noise-scale {args.noise_scale:g}: must be > 0")
     cases = matrix(generators=tuple(args.generator or ("ring", "paper")))
     if args.seed_offset:
         cases = [dataclasses.replace(c, seed=c.seed + args.seed_offset) for c in cases]
+    if args.noise_scale != 1.0:
+        cases = [dataclasses.replace(c, noise=c.noise * args.noise_scale) for c in cases]
     if args.only:
         cases = [c for c in cases if c.name in set(args.only)]
     print(f"{len(cases)} cases, {args.jobs} worker(s); records → {args.out}", file=sys.stderr)
@@ -516,7 +542,7 @@ def main(argv=None) -> int:
     print(totals(ordered))
     print()
     print(table(ordered))
-    if not args.no_docs and not args.only and not args.generator and not args.seed_offset:
+    if not args.no_docs and not args.only and not args.generator and not args.seed_offset and args.noise_scale == 1.0:
         write_docs(ordered, ROOT / "docs" / "validation.md", elapsed, args.jobs)
         print(f"wrote {ROOT / 'docs' / 'validation.md'}", file=sys.stderr)
     return 0
