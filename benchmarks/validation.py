@@ -346,6 +346,10 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1298 / 1337 (97 %) | 11 | 9 / 1884 (0.5 %) | 0 | **13 / 14** (sidewall shear: m_s for tangential); no-effect cases **13 / 14** (24 points: sidewall_membrane) | 0 |
 | the matrix's seeds, noise × 0.02 (0.01 %), session 24 | 1ac395c | paper | 1190 / 1213 (98 %) | 6 | 16 / 1682 (1.0 %) | 1: tangential + added mass 3 / 58 | **11 / 13** (added mass: rhoA; tangential + added mass: rhoA beside tangential); no-effect cases **13 / 14** (1,024 Hz: air_cavity) | 0 |
 | | | ring | 1299 / 1337 (97 %) | 12 | 18 / 1970 (0.9 %) | 1: reference 4 / 71 | 14 / 14 | 0 |
+| noise × 0.2, session 24 (the crowd test's dispersion ends at a gap of more than an alias span) | this session's | paper | 1191 / 1213 (98 %) | 5 | 14 / 1666 (0.8 %) | 1: tangential + added mass 4 / 49 | 13 / 13 | 0 |
+| | | ring | 1298 / 1337 (97 %) | 11 | 9 / 1884 (0.5 %) | 0 | 13 / 14 (sidewall shear: m_s for tangential); no-effect cases **14 / 14** (the 24 points now right) | 0 |
+| noise × 0.02, session 24 (as above) | this session's | paper | 1189 / 1213 (98 %) | 7 | 16 / 1682 (1.0 %) | 1: tangential + added mass 3 / 58 | 11 / 13 (as before); no-effect cases 13 / 14 (1,024 Hz: air_cavity) | 0 |
+| | | ring | 1299 / 1337 (97 %) | 12 | 18 / 1970 (0.9 %) | 1: reference 4 / 71 | 14 / 14 | 0 |
 
 Session 24's quieter runs: the same tests with every sensor's noise (force and responses) 5 ×
 and 50 × lower. Nothing the matrix misses is the noise's: the same weak same-direction modes
@@ -358,7 +362,15 @@ false sidewall_membrane and its sidewall shear m_s for tangential; at 0.01 % the
 mass is read as rhoA, its 1,024 Hz case adopts a false air_cavity). The thresholds were measured
 at the matrix's noise (0.5–5 %); what scales with the noise in them, and what does not (a
 record's truncated decay, the points' gain errors, the model's own misfit), is the next thing to
-measure (docs/lsce.md, "Session 24").
+measure (docs/lsce.md, "Session 24"). One chain is fixed: the crowd test's dispersion no longer
+runs through an order the alias walk read beyond a gap of more than N/2 orders (a weak copy read
+as the same n = 51 had taken the 24-point crowd's flags): at 0.1 % the ring's 24 points are
+right again (base RMS 0.083 → 0.020 %); at 0.01 % three base fits come down (the references
+0.073 → 0.002 % and 0.012 → 0.001 %, the ring's rim 0.049 → 0.001 %) and the paper's 48-point
+combination reads its same n = 24 at 170.13 Hz as a crowd with n = 72 — which lies, by the
+branch's saturation, within its bandwidth, but beyond the generator's n ≤ 60, so the ruler
+scores it mislabelled. The matrix and the seeds + 1000, + 2000, + 3000 are unchanged to the
+count (one base RMS at + 2000, 20.8 → 22.3 %, same diagnosis).
 
 Session 23's held-out runs, case by case against session 22's: only the paper's two added-mass
 cases move (the order-mixing test, docs/lsce.md "Session 23", finds their mass on the sensors'

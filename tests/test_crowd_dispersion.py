@@ -103,3 +103,28 @@ def test_the_law_stands_alone_only_where_it_describes_the_branch(ring_same):
     assert law is not None and all(f[n] - law(n) > 4.0 for n in (18, 19, 20))
     membrane = branch_dispersion(ns, list(f[:18]), "same")
     np.testing.assert_allclose([membrane(n) for n in (18, 19, 20)], f[18:21], atol=0.3)
+
+
+def test_a_lone_order_across_an_alias_span_does_not_bridge_the_dispersion(ring_same):
+    """24 points, the ring's in-phase branch n = 0 … 24 with ζ = 0.02, and one weak row the
+    alias walk read as the same branch's n = 51 at 380.36 Hz (a copy, as in the matrix's
+    24-point case at 0.1 % noise). By the truth n = 19 is a crowd: its alias 24 + 5 = 29 lies
+    within 2ζf of it. Interpolated to the lone row, f(29) would be 206 Hz and the crowd lost;
+    27 orders with no mode between (more than N/2 = 12, an alias span) do not bridge it."""
+    from tiremodal_cli.modal.crowds import crowds
+    N = 24
+    assert abs(ring_same[29] - ring_same[19]) < 2 * 0.02 * ring_same[19]
+    ns = list(range(25)) + [51]
+    f = [ring_same[n] for n in range(25)] + [380.36]
+    n_sp = [min(n % N, N - n % N) for n in ns]
+    out = crowds(f, [0.02] * len(f), ns, n_sp, ["same"] * len(f), [True] * len(f), N)
+    assert 29 in out[19]
+    assert crowds(f[:-1], [0.02] * 25, ns[:-1], n_sp[:-1], ["same"] * 25, [True] * 25, N)[19] == out[19]
+
+
+def test_an_alias_span_gap_cuts_the_branchs_points():
+    from tiremodal_cli.modal.crowds import _anchored
+    pts = {0: 53.0, 1: 57.0, 5: 110.0, 24: 166.8, 51: 380.4}
+    assert _anchored(pts, 24) == {0: 53.0, 1: 57.0, 5: 110.0}  # 5 → 24 is 19 > 12 orders
+    assert _anchored(pts, 48) == {0: 53.0, 1: 57.0, 5: 110.0, 24: 166.8}  # 24 → 51 is 27 > 24
+    assert _anchored(pts, 60) == pts
