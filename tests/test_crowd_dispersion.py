@@ -128,3 +128,33 @@ def test_an_alias_span_gap_cuts_the_branchs_points():
     assert _anchored(pts, 24) == {0: 53.0, 1: 57.0, 5: 110.0}  # 5 → 24 is 19 > 12 orders
     assert _anchored(pts, 48) == {0: 53.0, 1: 57.0, 5: 110.0, 24: 166.8}  # 24 → 51 is 27 > 24
     assert _anchored(pts, 60) == pts
+
+
+@pytest.fixture(scope="module")
+def ring_opposite():
+    """{n: f (Hz)} of the finite-element ring's anti-phase branch to n = 49."""
+    m = ring_modes(RingParameters(), f_max_hz=1600)
+    out = {}
+    for f, n, b in zip(m.freq_hz, m.n, m.branch):
+        if b == "opposite":
+            out.setdefault(int(n), float(f))
+    return out
+
+
+def test_candidates_reach_one_alias_span_above_the_branchs_top(ring_opposite):
+    """24 points, the ring's anti-phase branch read by the alias walk up to n = 47 (2 N, as
+    the matrix's 2,560 Hz paper test reads its branch to n = 60), ζ = 0.035. By the truth n = 47
+    (1,475.7 Hz) is a crowd: n = 49 of its alias class (24 · 2 + 1) lies 93.1 Hz above, inside
+    2ζf = 103.3 Hz; n = 30 is alone (its class's n = 42 is 461 Hz above). Candidates capped at
+    1.5 N = 36 had left n = 47 a confident order."""
+    from tiremodal_cli.modal.crowds import candidate_limit, crowds
+    N, zeta = 24, 0.035
+    assert ring_opposite[49] - ring_opposite[47] < 2 * zeta * ring_opposite[47]
+    assert ring_opposite[42] - ring_opposite[30] > 2 * zeta * ring_opposite[30]
+    ns = list(range(48))
+    f = [ring_opposite[n] for n in ns]
+    n_sp = [min(n % N, N - n % N) for n in ns]
+    out = crowds(f, [zeta] * 48, ns, n_sp, ["opposite"] * 48, [True] * 48, N)
+    assert out[47] == (47, 49)
+    assert out[30] == ()
+    assert candidate_limit(N, 47) == 71 and candidate_limit(N, 10) == 36

@@ -28,7 +28,7 @@ from scipy.optimize import minimize_scalar
 
 from tiremodal_cli.conventions import SAME
 
-__all__ = ["branch_dispersion", "crowds", "saturating_dispersion"]
+__all__ = ["branch_dispersion", "candidate_limit", "crowds", "saturating_dispersion"]
 
 #: fewest clear orders n ≥ 2 of a branch the saturating form (4 parameters) is fitted to
 MIN_ORDERS_FIT = 6
@@ -164,6 +164,16 @@ def _anchored(points: dict, n_points: int) -> dict:
     return points
 
 
+def candidate_limit(n_points: int, top: int) -> int:
+    """The highest order a crowd's candidates run to: one alias span N above the branch's
+    highest clear order ``top``, and at least 1.5 N. Every spatial order's next alias above
+    the orders the branch shows is then a candidate; a fixed 1.5 N had left the 24-point
+    paper test at 2,560 Hz, whose opposite branch is read up to n = 60 (2.5 N), with its
+    n = 47 at 834 Hz alone, though n = 49 of its alias class lies 18 Hz above, inside the
+    52 Hz half-power bandwidth (the two reported as one confident n = 47)."""
+    return max(int(1.5 * n_points), int(top) + n_points)
+
+
 def _alias_class(m: int, n_points: int, n_hi: int) -> set:
     """The orders 0 … n_hi that alias onto spatial order m on a grid of N points (j N ± m)."""
     return {c for j in range(0, n_hi // max(n_points, 1) + 2) for c in (j * n_points - m, j * n_points + m)
@@ -191,7 +201,7 @@ def crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=
     maximum would lift to the branch's top, flattening it) against their orders,
     interpolated, and beyond the highest measured order continued (:func:`branch_dispersion`:
     the same-direction branch flattens under the sidewall resonance, where many orders pile
-    up). Candidates run up to 1.5 N. An alias order that
+    up). Candidates run up to :func:`candidate_limit`. An alias order that
     another mode of the branch holds is no candidate (its pole was found apart from this
     one, so the two were resolved). Nor is one whose own pole the estimator found more than
     this mode's bandwidth away: a mode reading the same spatial order (so any of its aliases)
@@ -208,12 +218,12 @@ def crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=
         return out
     f = np.asarray(freq_hz, dtype=float)
     z = np.asarray(damping_ratio, dtype=float)
-    n_hi = int(1.5 * n_points)
     for br in {b for b in branch if b is not None}:
         on = _anchored({ns[r]: f[r] for r in range(k) if branch[r] == br and clear[r]}, n_points)
         f_of = branch_dispersion(list(on), list(on.values()), br)
         if f_of is None:
             continue
+        n_hi = candidate_limit(n_points, max(on))
 
         for r in range(k):
             if branch[r] != br:
