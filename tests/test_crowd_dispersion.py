@@ -158,3 +158,26 @@ def test_candidates_reach_one_alias_span_above_the_branchs_top(ring_opposite):
     assert out[47] == (47, 49)
     assert out[30] == ()
     assert candidate_limit(N, 47) == 71 and candidate_limit(N, 10) == 36
+
+
+def test_an_in_phase_row_above_the_anti_phase_branch_is_not_on_its_branch(ring_same, ring_opposite):
+    """24 points, the ring's in-phase branch n = 0 … 24 (ζ = 0.02) and its anti-phase branch
+    n = 0 … 47, and one band-top row the alias walk read as the in-phase n = 25 at 1,323.3 Hz
+    (as in the matrix's 24-point 5,120 Hz combination at seed + 2000). The in-phase mode of
+    an order is the smaller root of its two-degree-of-freedom system: n = 25's lies below the
+    anti-phase n = 25 (the ring's, 785 Hz), so the row is no point of the in-phase branch.
+    Taken as its last step it lifted the branch's continuation off the crowd (n = 19's alias
+    29 within 2ζf by the truth): the crowd flags are those of the table without the row (the
+    row still holds its order 25, no candidate of another row then)."""
+    from tiremodal_cli.modal.crowds import crowds
+    N = 24
+    assert ring_same[25] < ring_opposite[25] < 1323.3
+    assert abs(ring_same[29] - ring_same[19]) < 2 * 0.02 * ring_same[19]
+    ns = list(range(25)) + list(range(48))
+    br = ["same"] * 25 + ["opposite"] * 48
+    f = [ring_same[n] for n in range(25)] + [ring_opposite[n] for n in range(48)]
+    n_sp = [min(n % N, N - n % N) for n in ns]
+    base = crowds(f, [0.02] * len(f), ns, n_sp, br, [True] * len(f), N)
+    out = crowds(f + [1323.3], [0.02] * (len(f) + 1), ns + [25], n_sp + [1], br + ["same"], [True] * (len(f) + 1), N)
+    assert 29 in base[19] and 29 in out[19]
+    assert [bool(c) for c in out[:len(f)]] == [bool(c) for c in base]

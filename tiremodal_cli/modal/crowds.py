@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from tiremodal_cli.conventions import SAME
+from tiremodal_cli.conventions import OPPOSITE, SAME
 
 __all__ = ["branch_dispersion", "candidate_limit", "crowds", "saturating_dispersion"]
 
@@ -174,6 +174,30 @@ def candidate_limit(n_points: int, top: int) -> int:
     return max(int(1.5 * n_points), int(top) + n_points)
 
 
+def _below_the_other_root(points: dict, br: str, clear_pts: dict) -> dict:
+    """A branch's clear orders ({n: f}) less those on the wrong side of the other branch: the
+    in-phase ("same") mode of an order is the smaller root of its two-degree-of-freedom system
+    (MODEL.md; :func:`saturating_dispersion`), so no in-phase mode lies above the anti-phase
+    mode of its order, nor an anti-phase one below the in-phase. The other branch's f(n) is
+    its clear orders interpolated, judged only within their range. Such a row's order is the
+    alias walk's inference, not the branch's (the ring's 24-point 5,120 Hz combination at
+    seed + 2000: a band-top row at 1,323.3 Hz read as the in-phase n = 25, 166.75 Hz being
+    that branch's n = 24 and the anti-phase n = 25 near 700 Hz, became the in-phase branch's
+    last step and lifted its continuation off the crowd)."""
+    other = clear_pts.get(OPPOSITE if br == SAME else SAME) or {}
+    if br not in (SAME, OPPOSITE) or len(other) < 2:
+        return points
+    no, fo = np.array(sorted(other)), np.array([other[n] for n in sorted(other)])
+    out = {}
+    for n, fr in points.items():
+        if no[0] <= n <= no[-1]:
+            f_other = float(np.interp(n, no, fo))
+            if (br == SAME and fr > f_other) or (br == OPPOSITE and fr < f_other):
+                continue
+        out[n] = fr
+    return out
+
+
 def _alias_class(m: int, n_points: int, n_hi: int) -> set:
     """The orders 0 … n_hi that alias onto spatial order m on a grid of N points (j N ± m)."""
     return {c for j in range(0, n_hi // max(n_points, 1) + 2) for c in (j * n_points - m, j * n_points + m)
@@ -218,8 +242,9 @@ def crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=
         return out
     f = np.asarray(freq_hz, dtype=float)
     z = np.asarray(damping_ratio, dtype=float)
-    for br in {b for b in branch if b is not None}:
-        on = _anchored({ns[r]: f[r] for r in range(k) if branch[r] == br and clear[r]}, n_points)
+    clear_pts = {br: {ns[r]: f[r] for r in range(k) if branch[r] == br and clear[r]} for br in set(branch) - {None}}
+    for br in clear_pts:
+        on = _anchored(_below_the_other_root(clear_pts[br], br, clear_pts), n_points)
         f_of = branch_dispersion(list(on), list(on.values()), br)
         if f_of is None:
             continue
