@@ -121,7 +121,13 @@ def _class_reading(m, rf: RobustFit, n_points: int):
     its frequency, as (order, model Hz, |ln(f_model/f)|) — when it differs from the order read
     and the reading is unambiguous: ``rf``'s outlier screen keeps that order and rejects every
     other order of the class, the one read among them (a flat branch top puts many orders of
-    a class at one frequency: no reading there). None otherwise."""
+    a class at one frequency: no reading there), and every other order lies a whole outlier
+    limit z_crit farther from the mode (in the fit's spreads) than the chosen one — a model
+    cannot choose between two orders it places closer together than its own misfit (session
+    25: the ring's sidewall coupling at seed + 3000, its same n = 19 at 265.6 Hz lifted 25 %
+    above the base model's flat top, re-read as n = 87 because the model put n = 87 0.4 Hz
+    nearer than n = 19 — just inside the screen, the other just outside; protected in every
+    candidate's fit, that label kept sidewall_membrane out). None otherwise."""
     model = rf.fit
     _, z_read = normalised_errors(model, rf.kept)
     med = float(np.median(z_read))
@@ -134,8 +140,9 @@ def _class_reading(m, rf: RobustFit, n_points: int):
     err = np.abs(np.log(np.where(np.isfinite(fm) & (fm > 0), fm, np.inf) / m.frequency_hz))
     j = int(np.argmin(err))
     z = np.where(np.isfinite(fm), (fm - m.frequency_hz) / m.uncertainty_hz, np.inf)
-    inside = np.abs(z - med) / rf.scale <= rf.z_crit
-    if cls[j] != m.n and inside[j] and inside.sum() == 1:
+    t = np.abs(z - med) / rf.scale
+    inside = t <= rf.z_crit
+    if cls[j] != m.n and inside[j] and inside.sum() == 1 and np.sort(t)[1] - t[j] > rf.z_crit:
         return cls[j], float(fm[j]), float(err[j])
     return None
 
