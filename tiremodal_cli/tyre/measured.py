@@ -11,7 +11,7 @@ import numpy as np
 
 from tiremodal_cli.conventions import BRANCHES
 
-__all__ = ['MeasuredMode', 'modes_from_rows']
+__all__ = ['MIN_MPC', 'MeasuredMode', 'modes_from_rows']
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,11 @@ class MeasuredMode:
         return dataclasses.asdict(self)
 
 
-def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = 0.5,
+#: MPC under which a row is no normal mode (left out of a fit, and of the evidence of extra modes)
+MIN_MPC = 0.5
+
+
+def modes_from_rows(rows, *, min_confidence: float = 0.5, min_mpc: float = MIN_MPC,
                     source: str = "", split_pairs: str = "mean", free_rim: bool = False
                     ) -> tuple[list[MeasuredMode], list[dict]]:
     """Measured modes usable for a fit, from table rows (``lsce`` JSON/CSV or a Table A1 CSV).
