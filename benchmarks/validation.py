@@ -356,9 +356,15 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | **1290** / 1334 (97 %) | 8 | 4 / 1822 (0.2 %) | 0 | 14 / 14 | 0 |
 | seeds + 3000, session 25 | c8600ad | paper | **1186** / 1212 (98 %) | 5 | 13 / 1635 (0.8 %) | 0 | 13 / 13 | 0 |
 | | | ring | **1297** / 1334 (97 %) | 6 | 8 / 1835 (0.4 %) | 0 | 13 / 14 (the sidewall coupling adopts nothing) | 0 |
-| noise × 0.2, session 25 | c8600ad | paper | 1192 / 1213 (98 %) | 4 | 14 / 1671 (0.8 %) | 1: tangential + added mass 4 / 49 | 13 / 13 | 0 |
+| seeds + 1000, session 25 (and in the diagnosis: an aliased order re-read only where the model tells the class's orders apart by more than its own misfit; a row that is no normal mode no evidence of a cavity) | 4920feb | paper | 1184 / 1212 (98 %) | 8 | 10 / 1621 (0.6 %) | 0 | 13 / 13 | 0 |
+| | | ring | 1291 / 1334 (97 %) | 7 | 11 / 1840 (0.6 %) | 1: mass 4 / 65 | **14 / 14** (mass: added_mass alone) | 0 |
+| seeds + 2000, session 25 (as above) | 4920feb | paper | 1184 / 1212 (98 %) | 7 | 12 / 1642 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | 1290 / 1334 (97 %) | 8 | 4 / 1822 (0.2 %) | 0 | 14 / 14 | 0 |
+| seeds + 3000, session 25 (as above) | 4920feb | paper | 1186 / 1212 (98 %) | 5 | 13 / 1635 (0.8 %) | 0 | 13 / 13 | 0 |
+| | | ring | 1297 / 1334 (97 %) | 6 | 8 / 1835 (0.4 %) | 0 | **14 / 14** (sidewall coupling: sidewall_membrane, 9.45 → 0.004 %) | 0 |
+| noise × 0.2, session 25 | c8600ad (4920feb alike) | paper | 1192 / 1213 (98 %) | 4 | 14 / 1671 (0.8 %) | 1: tangential + added mass 4 / 49 | 13 / 13 | 0 |
 | | | ring | 1298 / 1337 (97 %) | 11 | 10 / 1887 (0.5 %) | 0 | 13 / 14 (sidewall shear: m_s for tangential); no-effect cases 14 / 14 | 0 |
-| noise × 0.02, session 25 | c8600ad | paper | 1192 / 1213 (98 %) | 6 | 17 / 1688 (1.0 %) | 1: tangential + added mass 3 / 58 | 11 / 13 (as before); no-effect cases 13 / 14 (1,024 Hz: air_cavity) | 0 |
+| noise × 0.02, session 25 | c8600ad (4920feb alike) | paper | 1192 / 1213 (98 %) | 6 | 17 / 1688 (1.0 %) | 1: tangential + added mass 3 / 58 | 11 / 13 (as before); no-effect cases 13 / 14 (1,024 Hz: air_cavity) | 0 |
 | | | ring | 1299 / 1337 (97 %) | 12 | 18 / 1974 (0.9 %) | 1: reference 4 / 71 | 14 / 14 | 0 |
 
 Session 24's quieter runs: the same tests with every sensor's noise (force and responses) 5 ×
@@ -389,7 +395,14 @@ n = 48, the ring's 48-point opposite n = 29 and its sidewall coupling's same n =
 unchanged at every seed, every diagnosis as before (the ring's mass at + 1000 and its sidewall
 coupling at + 3000 still wrong; the latter is no search failure — the full evolutionary search
 of every refit, `benchmarks/search_equivalence.py`, ends where the local one does, at 9.4 % RMS
-with the same-direction n = 22–25 set aside). At 0.1 % noise paper + 1 found, ring one crowd blend
+with the same-direction n = 22–25 set aside). Both are right since 4920feb (docs/diagnose.md):
+the sidewall coupling's in-phase n = 19 at 265.6 Hz had been re-read as n = 87 by the base
+model, which puts every order of that class on its flat top alike — a model now re-reads an
+order only when the class's other orders lie a whole outlier limit farther from the mode —
+and the label, protected in every candidate's fit, had kept the membrane out; the mass's
+air cavity had taken a mass-mixed pair member at 189.8 Hz (MPC 0.21) for its mode — a row that
+is no normal mode is no longer evidence of an extra one. Every diagnosis at the matrix's seeds
+and at + 1000, + 2000, + 3000 is right; counts unchanged. At 0.1 % noise paper + 1 found, ring one crowd blend
 more reported (161.86 Hz in the 24-point case's group 11, between n = 11 and 13 within a
 bandwidth: the ruler's crowd, counted spurious).At 0.01 % paper found 1189 → 1192, spurious
 16 → 17, the same three diagnoses wrong; the crowd limit brings the 24-point cases' base fits
@@ -517,7 +530,7 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1301 / 1334 (98 %) | 8 / 1835 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-28, end of session 23 | a lumped mass on the sensors' plane (the mirror test's blind spot) seen by the order mixing — the clear modes' copies in other order groups symmetric about that plane beyond their antisymmetric part (modal.mixing) — and the groups then not treated as orthogonal, a mixed mode read at its dominant group; held out, no paper case over 5 % spurious at any seed; measured, not adopted: poles of a symmetric grid kept apart when visible though not pinned (docs/lsce.md, "Session 23") | paper | 1188 / 1212 (98 %) | 7 / 1635 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 2.4 min |
 | | | ring | 1301 / 1334 (98 %) | 8 / 1835 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
-| 2026-11-28, end of session 25 | a crowd's candidates run one alias span N above its branch's highest clear order (the 2,560 Hz 24-point tests' n = 47 a crowd with 49); on a symmetric complete grid a pinned pole of another order group is its own mode beside a crowd's unpinned blend (the opposite n = 48 at 843.6 Hz); the crowd test's dispersion leaves out a row on the wrong side of the other branch (an in-phase row above the anti-phase mode of its order); measured, not adopted: a quiet test's copies judged by the test's own leakage, every pole refined on a symmetric grid (docs/lsce.md, "Session 25") | paper | 1190 / 1212 (98 %) | 7 / 1646 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 2.3 min |
+| 2026-11-28, end of session 25 | a crowd's candidates run one alias span N above its branch's highest clear order (the 2,560 Hz 24-point tests' n = 47 a crowd with 49); on a symmetric complete grid a pinned pole of another order group is its own mode beside a crowd's unpinned blend (the opposite n = 48 at 843.6 Hz); the crowd test's dispersion leaves out a row on the wrong side of the other branch (an in-phase row above the anti-phase mode of its order); the diagnosis re-reads an aliased order only where the model tells the class's orders apart by more than its misfit, and takes no row that is no normal mode (MPC < 0.5) for a cavity's (held out: every diagnosis right at seeds + 1000 … + 3000); measured, not adopted: a quiet test's copies judged by the test's own leakage, every pole refined on a symmetric grid (docs/lsce.md, "Session 25") | paper | 1190 / 1212 (98 %) | 7 / 1646 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 2.3 min |
 | | | ring | 1301 / 1334 (98 %) | 8 / 1836 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
