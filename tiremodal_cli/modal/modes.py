@@ -162,8 +162,7 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     if not modes:
         raise no_stable_mode(band.freq, group_max)
     if opt.refine:  # the poles near the band's edges (docs/lsce.md, "Pole refinement")
-        complete = ortho and not gaps and not (mixing and mixing["mixed"])  # the groups' rows: every order apart
-        modes = refine_adopted(modes, {g: k for g, k in kept.items() if k is not None}, None if complete else synth)
+        modes = refine_adopted(modes, {g: k for g, k in kept.items() if k is not None}, synth)
     meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
             "max_order": int(group_max), "exp_tau_s": exp_tau_s, "antisymmetric_share": share,
             "order_mixing": mixing}

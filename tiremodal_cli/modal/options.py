@@ -33,8 +33,7 @@ class ModalOptions:
     order_within_band : lower the highest order to what the band's lines allow (``run``)
     refine : refine the adopted poles near the band's edges by variable-projection least
               squares in their order group's FRFs, kept where the physical FRFs agree
-              (except on a complete grid that shows the symmetry: the groups judge alone;
-              :mod:`.refine`; docs/lsce.md, "Pole refinement": near the edges LSCE biases
+              (:mod:`.refine`; docs/lsce.md, "Pole refinement": near the edges LSCE biases
               modes by up to 0.9 %; in the band's middle, where an added mass mixes the
               orders, the group's rows are no complete model and refining there moved
               right modes off), and the weak poles (kept by the own-peak rule) with

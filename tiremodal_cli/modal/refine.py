@@ -40,11 +40,7 @@ whose fit dropped other stable poles, refined with those poles held in the basis
 its group's other aliases of its branch, dropped as weak themselves); a moved pole is kept
 only where it also fits the physical FRFs better (every adopted pole near it in the basis,
 and for a weak pole every group's dropped poles, a free residue per FRF: the model the
-group's rows lack where an added mass mixes the orders). Not on a complete grid whose FRFs
-show the symmetry (no mixing): there each group's rows hold its orders alone and are the
-complete model, while a free residue per FRF cannot tell apart the neighbouring orders of
-other groups a bandwidth holds (session 26: the paper's 24-point combination's opposite
-n = 52, refined 874.37 → 877.6 Hz, truth 877.46, undone by that check).
+group's rows lack where an added mass mixes the orders).
 
 References
 ----------
@@ -303,8 +299,7 @@ def refine_adopted(modes: list, kept: dict, synthesis=None) -> list:
     participation (r, n_h) or None — :func:`dropped_poles`)}. With ``synthesis`` ((n_frf,
     K) complex, the physical FRFs' fit) a moved pole is kept only where it also fits the
     physical FRFs better (:func:`_physical_residual`; for a weak pole, with every group's
-    dropped poles in the basis too; None on a complete grid of a symmetric structure, where
-    the groups' rows judge alone).
+    dropped poles in the basis too).
 
     Refined: the poles within :data:`EDGE_HALF_WIDTHS` of a band edge, and the weak ones
     (share of the response under ``min_significance``: kept by the own-peak rule) of a
