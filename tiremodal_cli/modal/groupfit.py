@@ -119,7 +119,8 @@ def fit_clusters(data: GroupData, clusters) -> tuple:
     parts = [c.representative.participation for c in clusters]
     std = np.array([c.frequency_std_hz for c in clusters])
     if s.size and all(pt is not None for pt in parts):
-        return s, parts, fit_group_poly(data, s, np.array(parts), std)
+        nested = np.array([c.std_hz is not None for c in clusters])
+        return s, parts, fit_group_poly(data, s, np.array(parts), std, nested)
     return s, parts, fit_group(data, s, std)
 
 
@@ -133,12 +134,16 @@ def _poly_synthesis(data: GroupData, Y, L, poles):
     return _harmonic_major(lsfd_participation(data.freq, Y, poles, L, form=data.form)[1], data)
 
 
-def fit_group_poly(data: GroupData, s, L, std_hz=None) -> tuple:
+def fit_group_poly(data: GroupData, s, L, std_hz=None, nested=None) -> tuple:
     """:func:`fit_group` for a poly-reference group: residues ψ_c L_h (cos/sin as references).
 
-    ``L`` : (n_modes, n_h) the poles' participation factors. Returns as :func:`fit_group`.
+    ``L`` : (n_modes, n_h) the poles' participation factors. ``nested`` (bool per pole): the
+    poles :mod:`~tiremodal_cli.modal.beside` fitted beside a stronger one and supported by
+    nested fits with their neighbours free — judged as own peaks however near the stronger
+    mode (:func:`own_peaks`). Returns as :func:`fit_group`.
     """
     std_hz = np.full(len(s), np.inf) if std_hz is None else np.asarray(std_hz, dtype=float)
+    nested = np.zeros(len(s), dtype=bool) if nested is None else np.asarray(nested, dtype=bool)
     rejected = []
     Y = data.rows.reshape(data.n_h, data.n_c, -1).transpose(1, 0, 2)  # (channel, harmonic, K)
     for _ in range(s.size + 1):  # each pass drops one mode or returns
@@ -147,13 +152,13 @@ def fit_group_poly(data: GroupData, s, L, std_hz=None) -> tuple:
         res3, syn3 = lsfd_participation(data.freq, Y, s, L, form=data.form)
         residues, synthesis = _harmonic_major(res3, data), _harmonic_major(syn3, data)
         sig, own = _significances(data, residues, s)
-        alone = own_peaks(data, s, residues, synthesis, np.maximum(sig, own), std_hz)
+        alone = own_peaks(data, s, residues, synthesis, np.maximum(sig, own), std_hz, nested)
         r, why = _weakest(data, synthesis, s, np.maximum(sig, own),
                           lambda keep: _poly_synthesis(data, Y, L[keep], s[keep]), alone)
         if r is None:
             return GroupFit(residues, synthesis, sig, own), s, rejected, partial(_poly_synthesis, data, Y, L)
         rejected.append(_rejection(s[r], data.group, why))
-        s, L, std_hz = np.delete(s, r), np.delete(L, r, axis=0), np.delete(std_hz, r)
+        s, L, std_hz, nested = np.delete(s, r), np.delete(L, r, axis=0), np.delete(std_hz, r), np.delete(nested, r)
     return GroupFit(residues, synthesis, sig, own), s, rejected, partial(_poly_synthesis, data, Y, L)
 
 
@@ -185,7 +190,7 @@ def _weakest(data: GroupData, synthesis, s, sig, refit, own_peak):
 PEAK_OVER_NOISE = 3.0
 
 
-def own_peaks(data: GroupData, s, residues, synthesis, strength, std_hz) -> np.ndarray:
+def own_peaks(data: GroupData, s, residues, synthesis, strength, std_hz, nested=None) -> np.ndarray:
     """Which modes stand on a peak of their own, judged against the noise, not as a share.
 
     A mode r is judged so when (a) it lies outside the half-power band of every mode k of
@@ -209,7 +214,8 @@ def own_peaks(data: GroupData, s, residues, synthesis, strength, std_hz) -> np.n
     response there (the paper's sidewall same-direction n = 26 and 27, 4 % of the
     response, 8–10 Hz from a 26 × stronger opposite mode of their group, outside its
     half-power band, within 0.15 %). The modes judged so must still show a peak or phase
-    turn and pass the noise test (:func:`_weakest`).
+    turn and pass the noise test (:func:`_weakest`). A ``nested`` pole (:mod:`~tiremodal_cli.modal.beside`)
+    is not held to (a): nested fits with the stronger neighbour free have told it apart.
     """
     fn, zeta = poles_to_modal(s)
     res = data.rows - synthesis
@@ -220,7 +226,7 @@ def own_peaks(data: GroupData, s, residues, synthesis, strength, std_hz) -> np.n
     inside = (fn - hw >= data.freq[0]) & (fn + hw <= data.freq[-1])  # the bound needs both flanks
     visible = row_visibility(residues, s, res) >= PEAK_OVER_NOISE
     out = visible & (std_hz <= np.where(inside, pin_limit(hw, df, peak / noise), df))
-    for r in np.flatnonzero(out):
+    for r in np.flatnonzero(out & ~(np.zeros(s.size, bool) if nested is None else nested)):
         stronger = strength > strength[r]
         out[r] = not np.any(stronger & (np.abs(fn - fn[r]) <= np.maximum(hw, df)))
         if out[r] and std_hz[r] > df:  # the bound holds for a mode alone in its half-power band

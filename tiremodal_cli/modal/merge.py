@@ -15,7 +15,7 @@ import numpy as np
 import scipy.special
 
 from tiremodal_cli.frf.windows import correct_poles
-from tiremodal_cli.modal.groupfit import PEAK_OVER_NOISE
+from tiremodal_cli.modal.groupfit import PEAK_OVER_NOISE, PIN_SIGMAS
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import mpc
 
@@ -218,7 +218,9 @@ def _both_located(a: GroupMode, b: GroupMode, energy_ratio: float, line_hz: floa
     :data:`COPY_MAX_AMPLITUDE` ² of the stronger's energy — of the 532 located pairs, 12 of
     the 13 under it were copies and 506 of the 519 above it two modes.
     """
-    return (line_hz > 0 and energy_ratio >= COPY_MAX_AMPLITUDE**2 and b.frequency_std_hz <= line_hz
+    pinned = b.frequency_std_hz <= line_hz or np.ptp(poles_to_modal(np.array([a.pole, b.pole]))[0]) > \
+        PIN_SIGMAS * b.frequency_std_hz
+    return (line_hz > 0 and energy_ratio >= COPY_MAX_AMPLITUDE**2 and pinned
             and all(m.visibility >= PEAK_OVER_NOISE for m in (a, b)))
 
 

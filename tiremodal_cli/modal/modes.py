@@ -8,7 +8,6 @@ physical FRFs. Damping is corrected for the exponential window recorded in the F
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from dataclasses import dataclass, field, replace
 
@@ -21,20 +20,20 @@ from tiremodal_cli.frf.windows import correct_poles
 from tiremodal_cli.modal.band import band_or_every_line, default_band, live_channels, no_stable_mode, order_for_lines
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.gaps import cleaned_groups, weak_in_frfs
-from tiremodal_cli.modal.groupfit import GroupData, fit_clusters, row_visibility
+from tiremodal_cli.modal.groupfit import GroupData
 from tiremodal_cli.modal.joint import add_missing_orders
-from tiremodal_cli.modal.refine import dropped_poles, refine_adopted
+from tiremodal_cli.modal.refine import refine_adopted
 from tiremodal_cli.modal.point_order import (angle_order, frf_points_taken, result_points_taken, stored_order,
                                              table_points_taken)
-from tiremodal_cli.modal.guard import guarded_diagram
-from tiremodal_cli.modal.lsce import bridge, poles_to_modal, principal_responses, sweep, sweep_poly
+from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses
 from tiremodal_cli.modal.lsfd import mpc
 from tiremodal_cli.modal.leaks import leak_copies, under_residual
-from tiremodal_cli.modal.merge import COPY_MAX_AMPLITUDE, GroupMode, merge_groups, off_edges, swap_cost
+from tiremodal_cli.modal.merge import COPY_MAX_AMPLITUDE, merge_groups, off_edges
 from tiremodal_cli.modal.misreads import without_misreads
 from tiremodal_cli.modal.options import ModalOptions
-from tiremodal_cli.modal.plscf import confirmed, sweep_plscf
-from tiremodal_cli.modal.rescue import far_bands, unexplained_bands, with_rescued
+from tiremodal_cli.modal.plscf import confirmed
+from tiremodal_cli.modal.rescue import far_bands
+from tiremodal_cli.modal.groupmodes import group_modes
 from tiremodal_cli.modal.mirror import mirror_filled
 from tiremodal_cli.modal.mixing import order_mixing
 from tiremodal_cli.modal.spatial import decompose, grid_points, is_circumferential, leakage
@@ -184,13 +183,19 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
         data = GroupData(band.freq, rows, back, band.flat, "accelerance", opt, g, rows.shape[0] // band.Hb.shape[0],
                          band.Hb.shape[0])
-        out[g] = (data, _group_modes(data, spatial, group_max))
+        out[g] = (data, group_modes(data, spatial, group_max))
         if progress:
             progress(i + 1, len(groups))
     every = [m.pole for _, r in out.values() for m in r[1]]
     for g, (data, r) in out.items():  # peaks no pole of any group stands for (modal.rescue)
         far = far_bands(r[5], every, band.freq[1] - band.freq[0]) if not gaps else []
-        out[g] = (data, _group_modes(data, spatial, group_max, far)) if far else out[g]
+        out[g] = (data, group_modes(data, spatial, group_max, far)) if far else out[g]
+    mixing = (order_mixing(band.freq, {g: d.rows for g, (d, _) in out.items()},
+                           [(m.group, m.pole, m.significance) for _, r in out.values() for m in r[1]], channel_angle)
+              if orthogonal and not gaps else None)
+    if opt.beside and mixing is not None and not mixing["mixed"]:  # each group's rows a complete model
+        out = {g: (data, group_modes(data, spatial, group_max, beside=True, diagram=r[0]))
+               for g, (data, r) in out.items()}
     for g, (_, (d, modes, rej, group_synth, kept[g], _)) in sorted(out.items()):
         diagrams.append((g, d))
         found += modes
@@ -202,9 +207,6 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
     if gaps:
         found, copies = leak_copies(found, leakage(point_angle))
         rejected += copies
-    mixing = (order_mixing(band.freq, {g: d.rows for g, (d, _) in out.items()},
-                           [(m.group, m.pole, m.significance) for m in found], channel_angle)
-              if orthogonal and not gaps else None)
     orthogonal = orthogonal and not (mixing and mixing["mixed"])  # a lumped mass on the sensors' plane (modal.mixing)
     modes = merge_groups(found, line_hz=band.freq[1] - band.freq[0], min_significance=opt.min_significance,
                          orthogonal=orthogonal, leak=leakage(point_angle) if gaps else None)
@@ -258,55 +260,6 @@ def _order_groups(band: _Band, point_angle, spatial: bool, opt: ModalOptions):
     poly = min(opt.poly_order, max(1, top // 2)) if top < group_max else opt.poly_order
     poly = order_for_lines(poly, K, opt.order_within_band, n_ref=2) if spatial else poly
     return groups, top, replace(opt, poly_order=poly)
-
-
-def _group_poles(data: GroupData, b, spatial: bool, group_max: int) -> list:
-    """One group's poles at every model order, by the method of ``data.opt``."""
-    opt, rows, n_h = data.opt, data.rows, data.n_h
-    poly = spatial and opt.poly and n_h == 2  # the cos and sin components as two references
-    if opt.method == "plscf":
-        Y3 = rows.reshape(n_h, data.n_c, -1).transpose(1, 0, 2) if poly else rows[:, None, :]
-        poles = sweep_plscf(data.freq, Y3, range(1, (opt.poly_order if poly else group_max) + 1))
-        if not poly:  # one reference: no participation to compare, shapes from the band
-            poles = [dataclasses.replace(op, participation=None) for op in poles]
-        return poles
-    if poly:  # split pairs resolve
-        guard = b.irf.shape[-1] - b.freq_hz.size
-        irf = np.fft.ifft(bridge(rows.reshape(n_h, data.n_c, -1).transpose(1, 0, 2), guard), axis=-1)
-        return sweep_poly(irf, range(1, opt.poly_order + 1), b.dt, b.f_lo, b.width_hz, workers=opt.workers)
-    return sweep(b, range(2, group_max + 1), skip=opt.skip)
-
-
-def _group_modes(data: GroupData, spatial: bool, group_max: int, rescue=()):
-    """One order group: its stabilization diagram, its modes (GroupMode), the poles dropped
-    after LSFD, its synthesis in the physical FRFs, (with ``opt.refine``; else None) what
-    :func:`_refine_adopted` needs: (data, kept poles, their participation, the fit's
-    synthesis in the group's rows, the poles the fit dropped and their participation —
-    :func:`~tiremodal_cli.modal.refine.dropped_poles`), and the bands where its fit leaves a
-    peak no kept pole stands for (:func:`~tiremodal_cli.modal.rescue.unexplained_bands`).
-    ``rescue`` (bands, Hz): the sweep redone at twice the order adds its clusters there."""
-    d = guarded_diagram(data, lambda b: _group_poles(data, b, spatial, group_max))
-    s0, parts, (fit, s, rej, refit) = fit_clusters(data, d.selected())
-    d2 = rescue and with_rescued(data, d, rescue, lambda dd, b, top: _group_poles(dd, b, spatial, top), group_max)
-    if d2:  # peaks no pole stood for (``rescue``): the sweep at twice the order found poles there
-        d, (s0, parts, (fit, s, rej, refit)) = d2, fit_clusters(data, d2.selected())
-    bands = unexplained_bands(data.freq, data.rows, 0 if fit is None else fit.synthesis, s)
-    if fit is None:
-        return d, [], rej, None, None, bands
-    scatter = {c.representative.s: c.frequency_std_hz for c in d.selected()}
-    noise = float(np.sqrt(np.mean(np.sum(np.abs(data.rows - fit.synthesis) ** 2, axis=0))))
-    seen = row_visibility(fit.residues, s, data.rows - fit.synthesis)
-    modes = [GroupMode(s[k], data.group, data.back @ fit.residues[:, k], float(fit.significance[k]),
-                       scatter[complex(s[k])], swap_cost(data.rows, fit.synthesis, s, k, refit),
-                       float(fit.own[k]), noise, float(np.linalg.norm(fit.residues[:, k]) * abs(s[k]) ** 2 / abs(s[k].real)),
-                       float(seen[k]))
-             for k in range(s.size)]
-    if not data.opt.refine:
-        return d, modes, rej, data.back @ fit.synthesis, None, bands
-    P = np.array(parts) if all(pt is not None for pt in parts) else None
-    L = None if P is None else np.array([P[list(s0).index(p)] for p in s])
-    return (d, modes, rej, data.back @ fit.synthesis, (data, s, L, fit.synthesis) + dropped_poles(s0, P, s, data.freq),
-            bands)
 
 
 def _result(band: _Band, shape, modes, synth, exp_tau_s, *, diagrams, rejected, meta) -> ModalResult:

@@ -42,6 +42,8 @@ class ModalOptions:
               pole's image across the wrap) in a second sweep with a guard band after the
               band's top, each kept where the group's rows fit better (:mod:`.guard`); every
               other pole stays the first sweep's. Docs/lsce.md, "Guard band across the wrap"
+    beside : add a pole where a poly-reference group's residual holds a mode beside its
+              kept poles, judged by nested fits (:mod:`.beside`)
     """
 
     band_hz: tuple[float, float] | None = None
@@ -58,6 +60,7 @@ class ModalOptions:
     order_within_band: bool = False
     refine: bool = True
     guard: bool = True
+    beside: bool = True
 
     def check(self):
         if self.spatial not in ("auto", "on", "off"):

@@ -60,7 +60,7 @@ from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.modal.lsce import poles_to_modal
 
 __all__ = ["MAX_DAMPING_FACTOR", "MAX_SHIFT_HALF_WIDTHS", "WINDOW_HALF_WIDTHS", "dropped_poles", "forward_jacobian",
-           "moved_poles", "refine_poles", "refine_adopted"]
+           "moved_poles", "participation_basis", "refine_poles", "refine_adopted", "stack_references"]
 
 #: the window: lines within this many half-power half-widths of a refined pole (its
 #: half-power band and as much again on each flank, where the phase still turns)
@@ -107,7 +107,7 @@ def overlapping_sets(fn, hw) -> list:
     return sets
 
 
-def _basis(jw, s, L, q):
+def participation_basis(jw, s, L, q):
     """(n_ref · K, 2 m + 2 n_ref) complex: the LSFD columns of poles ``s`` with
     participation ``L`` ((m, n_ref)), then each reference's lower and upper residual."""
     K, n_ref = jw.size, L.shape[1]
@@ -132,7 +132,7 @@ def _projection_residual(A, Y):
     return (Y - As @ x).ravel()
 
 
-def _stack(rows, n_ref):
+def stack_references(rows, n_ref):
     """Rows (n_ref · n_c, K) harmonic-major → (n_ref · K, n_c) complex."""
     n_c = rows.shape[0] // n_ref
     return rows.reshape(n_ref, n_c, -1).transpose(0, 2, 1).reshape(-1, n_c)
@@ -181,14 +181,14 @@ def _refine_set(freq, rows, weight, s, s_orig, L, idx, q):
     if 2 * n_ref * w.sum() <= n_unknown + 2 * idx.size:
         return None
     jw = 2j * np.pi * freq[w]
-    Yc = _stack(rows[:, w], n_ref) * weight[None, :]
+    Yc = stack_references(rows[:, w], n_ref) * weight[None, :]
     Y = np.concatenate([Yc.real, Yc.imag], axis=0)
     s_use, L_use = s[use].copy(), L[use]
     s_use[:idx.size] = s_orig[idx]
     loc = np.arange(idx.size)
 
     def fun(theta):
-        return _projection_residual(_basis(jw, moved_poles(theta, s_use, loc), L_use, q), Y)
+        return _projection_residual(participation_basis(jw, moved_poles(theta, s_use, loc), L_use, q), Y)
 
     m = idx.size
     hw0 = -s_orig[idx].real
@@ -348,6 +348,6 @@ def _physical_residual(data, synthesis, poles, i) -> float:
     Yc = data.H_phys[:, w].T / np.sqrt(var)[None, :]
     Y = np.concatenate([Yc.real, Yc.imag], axis=0)
     jw = 2j * np.pi * data.freq[w]
-    r = _projection_residual(_basis(jw, poles[near], np.ones((int(near.sum()), 1), dtype=complex),
+    r = _projection_residual(participation_basis(jw, poles[near], np.ones((int(near.sum()), 1), dtype=complex),
                                     FORM_POWER[data.form]), Y)
     return float(r @ r)

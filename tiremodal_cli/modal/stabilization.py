@@ -58,6 +58,7 @@ class Cluster:
     adopted: bool = False
     reason: str = ""
     representative: StablePole | None = None
+    std_hz: float | None = None  # a pole fitted, not swept (modal.beside): its standard error
 
     @property
     def freq_hz(self) -> float:
@@ -71,6 +72,8 @@ class Cluster:
     def frequency_std_hz(self) -> float:
         """The scatter of its poles' frequencies over the model orders (Hz; sample standard
         deviation, 0 for a single pole): the frequency's uncertainty as the sweep sees it."""
+        if self.std_hz is not None:
+            return self.std_hz
         f = np.array([m.freq_hz for m in self.members])
         return float(np.std(f, ddof=1)) if f.size > 1 else 0.0
 
