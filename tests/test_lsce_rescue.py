@@ -92,7 +92,7 @@ def ring_5120_rim(tmp_path_factory):
 
     from tiremodal_cli.io.frffile import read_frf
     from tiremodal_cli.io.measurement import write_measurement
-    from tiremodal_cli.modal import modes
+    from tiremodal_cli.modal import groupmodes, modes
     from tiremodal_cli.tyre.simulate import simulate
     from tiremodal_cli.workflow.pipeline import run as run_pipeline
     from tiremodal_cli.workflow.run_options import RunOptions
@@ -105,7 +105,7 @@ def ring_5120_rim(tmp_path_factory):
     run_pipeline(folder / "test.h5", folder / "run", RunOptions(form=case.form))
     r = read_frf(folder / "run" / "frf.h5")
     default = modes.modal_table_from_frf(r)[0]
-    with mock.patch.object(modes, "unexplained_bands", lambda *a, **k: []):
+    with mock.patch.object(groupmodes, "unexplained_bands", lambda *a, **k: []):
         without = modes.modal_table_from_frf(r)[0]
     rim = min(m["frequency_hz"] for m in sim.truth["modes"] if m["branch"] == "rim" and m["n"] == 1)
     return rim, default, without

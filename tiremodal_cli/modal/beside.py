@@ -46,7 +46,6 @@ from dataclasses import replace
 import numpy as np
 import scipy.linalg
 import scipy.optimize
-import scipy.signal
 import scipy.special
 
 from tiremodal_cli.conventions import FORM_POWER
@@ -76,6 +75,18 @@ FTOL = 1e-5
 
 #: a new pole's frequency may move this many half-widths from its proposal
 SEARCH_HALF_WIDTHS = 1.0
+
+
+def _local_maxima(T, height: float, distance: int) -> np.ndarray:
+    """Indices of the local maxima of ``T`` over ``height``, none within ``distance`` lines of
+    a higher one kept (as ``scipy.signal.find_peaks(T, height, distance)``; written here
+    because importing scipy.signal imports scipy.stats, which ``run`` must not load: 0.4 s)."""
+    i = np.flatnonzero((T[1:-1] > T[:-2]) & (T[1:-1] >= T[2:]) & (T[1:-1] > height)) + 1
+    keep = []
+    for k in i[np.argsort(-T[i], kind="stable")]:
+        if all(abs(k - j) >= distance for j in keep):
+            keep.append(k)
+    return np.sort(np.array(keep, dtype=int))
 
 
 def _mac(R, psi, L) -> np.ndarray:
@@ -112,7 +123,7 @@ def proposals(freq, rows, synthesis, weight, half_lines: int, alpha: float = NOI
         return np.zeros(0, dtype=int)
     T = np.convolve(E, np.ones(w), mode="same")
     thr = scipy.special.chdtri(2 * R * w, alpha / K) / 2
-    peaks, _ = scipy.signal.find_peaks(T, height=thr, distance=max(half_lines, 1))
+    peaks = _local_maxima(T, thr, max(half_lines, 1))
     peaks = peaks[(peaks >= half_lines) & (peaks < K - half_lines)]  # a whole window inside the band
     return peaks[np.argsort(-T[peaks])]
 

@@ -61,12 +61,13 @@ def group_modes(data: GroupData, spatial: bool, group_max: int, rescue=(), besid
     if fit is None:
         return d, [], rej, None, None, bands
     scatter = {c.representative.s: c.frequency_std_hz for c in d.selected()}
+    fitted = {c.representative.s: c.std_hz is not None for c in d.selected()}
     noise = float(np.sqrt(np.mean(np.sum(np.abs(data.rows - fit.synthesis) ** 2, axis=0))))
     seen = row_visibility(fit.residues, s, data.rows - fit.synthesis)
     modes = [GroupMode(s[k], data.group, data.back @ fit.residues[:, k], float(fit.significance[k]),
                        scatter[complex(s[k])], swap_cost(data.rows, fit.synthesis, s, k, refit),
                        float(fit.own[k]), noise, float(np.linalg.norm(fit.residues[:, k]) * abs(s[k]) ** 2 / abs(s[k].real)),
-                       float(seen[k]))
+                       float(seen[k]), fitted=fitted[complex(s[k])])
              for k in range(s.size)]
     if not data.opt.refine:
         return d, modes, rej, data.back @ fit.synthesis, None, bands

@@ -43,6 +43,7 @@ class GroupMode:
     group_noise: float = 0.0  # the group's residual after its fit, RMS over the band's lines (rows' norm)
     peak: float = 0.0  # the mode's response in its group's rows (accelerance) at resonance, ‖r‖ |s|² / |Re s|
     visibility: float = 0.0  # its peak over the residual RMS in the row that shows it best (groupfit.row_visibility)
+    fitted: bool = False  # a pole fitted beside a stronger one (modal.beside): its scatter is its standard error
 
 
 @dataclass(frozen=True)
@@ -218,8 +219,8 @@ def _both_located(a: GroupMode, b: GroupMode, energy_ratio: float, line_hz: floa
     :data:`COPY_MAX_AMPLITUDE` ² of the stronger's energy — of the 532 located pairs, 12 of
     the 13 under it were copies and 506 of the 519 above it two modes.
     """
-    pinned = b.frequency_std_hz <= line_hz or np.ptp(poles_to_modal(np.array([a.pole, b.pole]))[0]) > \
-        PIN_SIGMAS * b.frequency_std_hz
+    pinned = b.frequency_std_hz <= line_hz or (b.fitted and np.ptp(poles_to_modal(np.array([a.pole, b.pole]))[0])
+                                               > PIN_SIGMAS * b.frequency_std_hz)
     return (line_hz > 0 and energy_ratio >= COPY_MAX_AMPLITUDE**2 and pinned
             and all(m.visibility >= PEAK_OVER_NOISE for m in (a, b)))
 
