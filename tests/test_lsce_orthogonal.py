@@ -119,8 +119,10 @@ def test_a_located_mode_is_not_merged_into_an_unlocated_blend_of_another_order()
     energy. On a complete grid of a symmetric structure a copy holds a few thousandths of its
     source's energy (``COPY_MAX_AMPLITUDE``): n = 48 is its own mode, though the blend's
     broad pole lets its group's data accept any pole near it (the swap test merged them, and
-    n = 48 was lost). Where the stronger pole is pinned and the weaker one wanders, the swap
-    test still decides (a wandering pole beside a located one may be its copy)."""
+    n = 48 was lost). Where the stronger pole is pinned and the weaker one wanders within 3 ×
+    its scatter of it, the swap test still decides (a wandering pole beside a located one may
+    be its copy); one that wanders less than a third of its distance is located apart (session
+    28, ``merge._both_located``)."""
     from tiremodal_cli.modal.merge import merge_groups
     blend = _group_mode(837.15, 1, 1.0, 4.48, accepts_any=True)
     own = _group_mode(843.64, 0, np.sqrt(0.43), 0.35, accepts_any=False)
@@ -128,5 +130,7 @@ def test_a_located_mode_is_not_merged_into_an_unlocated_blend_of_another_order()
     assert len(out) == 2
     assert len(merge_groups([blend, own], line_hz=0.5, orthogonal=False)) == 1
     pinned = _group_mode(837.15, 1, 1.0, 0.3, accepts_any=True)
-    wanders = _group_mode(843.64, 0, np.sqrt(0.43), 2.0, accepts_any=True)
+    wanders = _group_mode(843.64, 0, np.sqrt(0.43), 2.5, accepts_any=True)  # 6.5 Hz < 3 × 2.5 Hz
     assert len(merge_groups([pinned, wanders], line_hz=0.5, orthogonal=True)) == 1
+    apart = _group_mode(843.64, 0, np.sqrt(0.43), 2.0, accepts_any=True)  # 6.5 Hz > 3 × 2.0 Hz
+    assert len(merge_groups([pinned, apart], line_hz=0.5, orthogonal=True)) == 2

@@ -143,7 +143,7 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
         for j in near:
             floor = abs(fn[j] - fn[i]) <= SAME_POLE_FLOOR_BW * 2 * zeta[i] * fn[i]
             apart = _pinned_apart(found[i], found[j], fn[i], fn[j], line_hz, min_significance)
-            if orthogonal and (_both_located(found[i], found[j], energy[j] / energy[i], line_hz)
+            if orthogonal and (_both_located(found[i], found[j], energy[j] / energy[i], line_hz, leak is None)
                                or _above_leak(found[i], found[j], leak)):
                 continue
             if found[j].group not in groups_seen and (floor or (not apart and (found[j].swap_cost(found[i].pole) <= thr
@@ -192,7 +192,7 @@ def _mark_twins(found, i, fn, zeta, used) -> None:
 COPY_MAX_AMPLITUDE = 0.05
 
 
-def _both_located(a: GroupMode, b: GroupMode, energy_ratio: float, line_hz: float) -> bool:
+def _both_located(a: GroupMode, b: GroupMode, energy_ratio: float, line_hz: float, complete: bool = True) -> bool:
     """Whether two poles of different groups of a complete grid are each located by their own
     group's data — two modes, however close (session 16).
 
@@ -218,9 +218,16 @@ def _both_located(a: GroupMode, b: GroupMode, energy_ratio: float, line_hz: floa
     data: every copy is visible): the weaker must hold ``energy_ratio`` ≥
     :data:`COPY_MAX_AMPLITUDE` ² of the stronger's energy — of the 532 located pairs, 12 of
     the 13 under it were copies and 506 of the 519 above it two modes.
+
+    Since session 28 the weaker is located also when it lies more than
+    :data:`~tiremodal_cli.modal.groupfit.PIN_SIGMAS` × its scatter (a fitted pole's
+    standard error, :mod:`~tiremodal_cli.modal.beside`) from the stronger — on a complete grid
+    (``complete``), where a copy is told by its energy above; with points missing a leak's
+    copy in a noisy group wanders anywhere in its band, and only a fitted pole is so judged.
+    Measured on the matrix (docs/lsce.md, "A weak mode beside a strong one").
     """
-    pinned = b.frequency_std_hz <= line_hz or (b.fitted and np.ptp(poles_to_modal(np.array([a.pole, b.pole]))[0])
-                                               > PIN_SIGMAS * b.frequency_std_hz)
+    apart = np.ptp(poles_to_modal(np.array([a.pole, b.pole]))[0]) > PIN_SIGMAS * b.frequency_std_hz
+    pinned = b.frequency_std_hz <= line_hz or ((complete or b.fitted) and apart)
     return (line_hz > 0 and energy_ratio >= COPY_MAX_AMPLITUDE**2 and pinned
             and all(m.visibility >= PEAK_OVER_NOISE for m in (a, b)))
 
