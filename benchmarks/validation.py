@@ -374,6 +374,10 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1290 / 1334 (97 %) | 8 | 4 / 1822 (0.2 %) | 0 | 14 / 14 | 0 |
 | seeds + 3000, the same (not adopted) | e364797 | paper | 1186 / 1212 (98 %) | 5 | 13 / 1635 (0.8 %) | 0 | 13 / 13 | 0 |
 | | | ring | 1297 / 1334 (97 %) | 6 | 8 / 1835 (0.4 %) | 0 | 14 / 14 | 0 |
+| seeds + 1000, session 28 (modal.beside: a weak mode beside a strong one of its group, fitted by nested fits; a weaker pole on a complete grid located 3 × its scatter from the stronger) | a81e46a | paper | 1187 / 1212 (98 %) | 5 | 10 / 1624 (0.6 %) | 0 | 13 / 13 | 0 |
+| | | ring | 1294 / 1334 (97 %) | 6 | 12 / 1843 (0.7 %) | 1: mass 4 / 65 | 14 / 14 | 0 |
+| seeds + 2000, session 28 (as above) | a81e46a | paper | 1186 / 1212 (98 %) | 7 | 12 / 1645 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | 1292 / 1334 (97 %) | 8 | 9 / 1829 (0.5 %) | 0 | 14 / 14 | 0 |
 
 Session 24's quieter runs: the same tests with every sensor's noise (force and responses) 5 ×
 and 50 × lower. Nothing the matrix misses is the noise's: the same weak same-direction modes
@@ -542,6 +546,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1301 / 1334 (98 %) | 8 / 1836 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-28, end of session 26 | no change to the package (the code of fed11f3); measured, not adopted: a refined pole of a complete symmetric grid judged by its group's rows alone (matrix paper + 1 found, − 1 spurious; seeds + 1000 paper and ring − 1 found, + 1 spurious), the noise test's fits weighted as its sum (spurious paper 7 → 14, ring 8 → 12), a pin rule from each pole's own Cramér–Rao bound, a second sweep with the channels as references, the ruler's crowd test over the paper model's orders above n_max, the dispersion's proposals on complete grids (docs/lsce.md, "Session 26") | paper | 1190 / 1212 (98 %) | 7 / 1646 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 6.2 min (machine shared) |
 | | | ring | 1301 / 1334 (98 %) | 8 / 1836 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-29, end of session 28 | a weak mode beside a strong one of its order group fitted by variable projection where the group's residual holds a bandwidth-wide hump, kept on nested fits with its neighbours free, a shape unlike theirs and 3 σ from them (modal.beside; complete symmetric unmixed grids); on a complete grid a weaker pole 3 × its scatter from the stronger is located (the code of a81e46a) | paper | 1193 / 1212 (98 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 7.9 min |
+| | | ring | 1304 / 1334 (98 %) | 10 / 1841 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
