@@ -239,3 +239,20 @@ def test_a_split_pair_is_found_at_either_member_or_at_its_mean(f_row, status):
     assert s["detail"][0]["status"] == status
     if status == "found":
         assert s["freq_err_median_pct"] <= 0.06
+
+
+def test_crowd_does_not_depend_on_where_the_generator_stops():
+    """The paper's generator lists orders up to n_max; a tyre has them all. With 48 points
+    the same-direction n = 24 (166.6 Hz, ζ ≈ 3.8 %) and its alias n = 72 lie 1.2 Hz apart
+    under the branch's asymptote, a fifteenth of a bandwidth: a crowd whether or not n = 72
+    is listed. The ruler's verdict on every listed order must be the same with n_max = 60
+    (n = 72 left out) as with n_max = 80 (n = 72 in the truth and the FRFs)."""
+    base = SimulationConfig(model="paper", n_points=48, n_hits=1, sample_rate=1024.0, n_samples=1024,
+                            noise=0.005, seed=5, n_max=60)
+    short = expected_groups(simulate(base), base)
+    full_cfg = dataclasses.replace(base, n_max=80)
+    full = {(g["n"], g["branch"]): g["crowd"] for g in expected_groups(simulate(full_cfg), full_cfg)}
+    assert {(g["n"], g["branch"]): g["crowd"] for g in short} == {k: full[k] for k in
+                                                                 ((g["n"], g["branch"]) for g in short)}
+    n24 = next(g for g in short if g["n"] == 24 and g["branch"] == "same")
+    assert n24["crowd"] and not n24["expected"]

@@ -13,7 +13,13 @@ What a test *could* show:
   RMS, white, over the hits' averaged force spectrum);
 * not in an unresolvable crowd: no other truth mode of the same branch whose order is an
   alias of this one with N points (n' ≡ ±n mod N) within one half-power bandwidth 2ζf
-  (different orders are told apart by the circumferential decomposition, aliases are not);
+  (different orders are told apart by the circumferential decomposition, aliases are not).
+  The paper's generator lists its orders up to ``n_max`` only; a tyre has them all, and no
+  test can know where a generator stopped, so the orders it leaves out (up to n_max + 2N,
+  by its own model, :func:`_unlisted_orders`) count in this test too — the same branch's
+  orders converge on one frequency (167.8 Hz), so an order n ≤ N/2 near that asymptote
+  whose alias above n_max lies within its bandwidth is a crowd like any other (they are
+  not expected, found or counted anywhere else);
 * a degenerate cos/sin pair (or a pair split by less than ζ f) is one mode.
 
 A free rim's n = 1 modes: both generators call a mode "rim" when the rim holds the largest
@@ -48,6 +54,7 @@ from tiremodal_cli.tyre.measured import MeasuredMode
 from tiremodal_cli.tyre.model import TyreParameters
 from tiremodal_cli.tyre.robust import with_sigma
 from tiremodal_cli.tyre.simulate import SimulationConfig, half_sine_spectrum
+from tiremodal_cli.tyre.solve import solve_modes
 
 __all__ = ["TOLERANCE", "EXPECTED_DIAGNOSIS", "DETECT_ALPHA", "expected_groups", "read_modes", "score_modes",
            "diagnosis_right", "detectable"]
@@ -142,12 +149,26 @@ def expected_groups(sim, cfg: SimulationConfig) -> list[dict]:
                     "snr": float(best), "valid": bool(f * (1 + g["zeta"]) <= f_valid), "visible": bool(best >= 3.0),
                     "aliased": bool(g["n"] > n_pts / 2), "alias_class": _alias(g["n"], n_pts),
                     "foreign": g["branch"] not in ("same", "opposite", "rim")})
+    others = out + _unlisted_orders(cfg, n_pts)
     for g in out:
         bw = 2 * g["zeta"] * g["frequency_hz"]
         g["crowd"] = any(h is not g and h["branch"] == g["branch"] and _alias(h["n"], n_pts) == _alias(g["n"], n_pts)
-                         and abs(h["frequency_hz"] - g["frequency_hz"]) < bw for h in out)
+                         and abs(h["frequency_hz"] - g["frequency_hz"]) < bw for h in others)
         g["expected"] = g["valid"] and g["visible"] and not g["crowd"]
     return out
+
+
+def _unlisted_orders(cfg: SimulationConfig, n_pts: int) -> list[dict]:
+    """The orders n_max < n ≤ n_max + 2N the paper's generator leaves out of its truth (and
+    its FRFs), by its own model: ``frequency_hz``, ``n``, ``branch`` for the crowd test
+    only (module docstring). Two alias cycles above n_max hold each alias class's nearest
+    unlisted orders of both signs (±n mod N); the ring lists every order below its band's
+    top (its mesh resolves them): none."""
+    if cfg.model != "paper":
+        return []
+    modes = solve_modes(cfg.params, n_max=cfg.n_max + 2 * n_pts, effects=cfg.effects)
+    keep = (modes.n > cfg.n_max) & (modes.freq_hz < 0.5 * cfg.sample_rate)
+    return [{"frequency_hz": float(f), "n": int(n), "branch": b} for f, n, b in zip(modes.freq_hz[keep], modes.n[keep], np.asarray(modes.branch)[keep])]
 
 
 def read_modes(path) -> list[dict]:
