@@ -65,8 +65,9 @@ def test_an_asymmetric_tyre_keeps_its_gaps():
 def test_failed_points_read_from_their_mirrors_give_every_expected_mode(failed_points_case):
     """Five of the 24 points of the one-hit 2 % noise Timoshenko + rim test missing, each
     with its mirror measured: the modal stage finds every expected truth mode of the full
-    grid (the validation ruler; the gappy-grid path found 47 of those 65,
-    ``benchmarks/gaps_sweep.py``), and its table holds the 19 measured points only."""
+    grid (the validation ruler; the gappy-grid path found 47 of 65, ``benchmarks/gaps_sweep.py``,
+    before session 29's ruler left out the opposite n = 56 … 59, in crowds with aliases the
+    generator does not list, above its n ≤ 60, on the Timoshenko-flattened branch), and its table holds the 19 measured points only."""
     from tiremodal_cli.modal.modes import modal_table_from_frf
     from tiremodal_cli.modal.options import ModalOptions
     from tiremodal_cli.workflow.validation_scoring import expected_groups, score_modes
@@ -82,7 +83,7 @@ def test_failed_points_read_from_their_mirrors_give_every_expected_mode(failed_p
     assert len(table.meta["mirrored_points"]["filled"]) == 5 and table.meta["mirrored_points"]["gaps_deg"] == []
     assert table.point_index.tolist() == [p for p in range(24) if p not in drop] and table.shapes.shape[-1] == 19
     sc = score_modes(expected_groups(sim, config_for(failed_points_case)), rows_of(table), sim.truth["modes"])
-    assert sc["found"] == sc["expected"] == 65, [d for d in sc["detail"] if d["status"] != "found"]
+    assert sc["found"] == sc["expected"] == 61, [d for d in sc["detail"] if d["status"] != "found"]
     assert sc["spurious"] <= 0.05 * sc["adopted"]
 
 

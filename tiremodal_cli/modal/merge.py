@@ -19,7 +19,8 @@ from tiremodal_cli.modal.groupfit import PEAK_OVER_NOISE, PIN_SIGMAS
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import mpc
 
-__all__ = ["GroupMode", "MergedMode", "SAME_POLE_ALPHA", "SAME_POLE_FLOOR_BW", "COPY_MAX_AMPLITUDE", "swap_cost",
+__all__ = ["GroupMode", "MergedMode", "SAME_POLE_ALPHA", "SAME_POLE_FLOOR_BW", "COPY_MAX_AMPLITUDE", "CHANNEL_MAC_MAX",
+           "channel_shape", "swap_cost",
            "merge_groups", "off_edges"]
 
 
@@ -104,7 +105,8 @@ def swap_cost(rows, synthesis, s, k, refit):
 
 
 def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz: float = 0.0,
-                 min_significance: float = 0.05, orthogonal: bool = False, leak=None) -> list[MergedMode]:
+                 min_significance: float = 0.05, orthogonal: bool = False, leak=None,
+                 n_channels: int = 1) -> list[MergedMode]:
     """One mode per physical pole.
 
     Candidates: poles of other order groups within the dominant pole's half-power
@@ -114,16 +116,17 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
     in place of its own, or the dominant group's data accept the candidate's pole
     (:func:`swap_cost`: 2ΔE below the χ²(2) quantile 1 − ``alpha``; either way one pole
     serves both groups — with a broken symmetry the weaker copy is at times the better
-    estimate),
-    or lies within :data:`SAME_POLE_FLOOR_BW` of a bandwidth (the estimator's bias) —
-    and adding its share does not turn a normal mode (MPC ≥ 0.5) into none;
+    estimate), or lies within :data:`SAME_POLE_FLOOR_BW` of a bandwidth (the estimator's
+    bias) — and adding its share does not turn a normal mode (MPC ≥ 0.5) into none;
     two modes of neighbouring orders (the opposite branch's n = 0 and 1 lie 0.15 % apart,
     a twentieth of a bandwidth) are rejected by their own data, however close; two weak
     poles pinned apart are two modes (:func:`_pinned_apart`; ``line_hz`` (Hz, 0: not
-    applied) and ``min_significance`` are its). With ``orthogonal`` (FRFs that show a symmetric
-    structure, :mod:`~tiremodal_cli.modal.symmetry`) two poles each located by their own
-    group's data are two modes however close (:func:`_both_located`), and so is, on a grid
-    with gaps (``leak``), a pole above what the other can leak into its group (:func:`_above_leak`).
+    applied) and ``min_significance`` are its). Two poles are two modes however close
+    (:func:`_two_modes`) when they move the ``n_channels`` channels otherwise
+    (:func:`_other_channel_shape`) or, with ``orthogonal`` (FRFs that show a symmetric
+    structure, :mod:`~tiremodal_cli.modal.symmetry`), when each is located by its own
+    group's data (:func:`_both_located`) or, on a grid with gaps (``leak``), one lies above
+    what the other can leak into its group (:func:`_above_leak`).
     The merged mode's shape is the sum of the groups' shares, its pole the dominant group's.
 
     Returns list of MergedMode, by |pole|.
@@ -131,8 +134,7 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
     thr = scipy.special.chdtri(2, alpha) / 2  # χ² upper quantile (scipy.stats costs 0.4 s to import)
     fn, zeta = poles_to_modal(np.array([f.pole for f in found]))
     energy = np.array([np.linalg.norm(f.residues) ** 2 for f in found])
-    used = np.zeros(len(found), dtype=bool)
-    out = []
+    used, out = np.zeros(len(found), dtype=bool), []
     for i in np.argsort(-energy):
         if used[i]:
             continue
@@ -143,8 +145,7 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
         for j in near:
             floor = abs(fn[j] - fn[i]) <= SAME_POLE_FLOOR_BW * 2 * zeta[i] * fn[i]
             apart = _pinned_apart(found[i], found[j], fn[i], fn[j], line_hz, min_significance)
-            if orthogonal and (_both_located(found[i], found[j], energy[j] / energy[i], line_hz, leak is None)
-                               or _above_leak(found[i], found[j], leak)):
+            if _two_modes(found[i], found[j], energy[j] / energy[i], line_hz, n_channels, orthogonal, leak):
                 continue
             if found[j].group not in groups_seen and (floor or (not apart and (found[j].swap_cost(found[i].pole) <= thr
                                                                                or found[i].swap_cost(found[j].pole) <= thr))):
@@ -163,6 +164,15 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
                               found[i].group_noise, found[i].swap_cost))
     out.sort(key=lambda m: abs(m.pole))
     return out
+
+
+def _two_modes(a: GroupMode, b: GroupMode, energy_ratio: float, line_hz: float, n_channels: int, orthogonal: bool,
+               leak) -> bool:
+    """Whether the weaker ``b`` of another group is another mode than ``a`` however close
+    (:func:`merge_groups`)."""
+    if _other_channel_shape(a, b, n_channels, line_hz):
+        return True
+    return orthogonal and (_both_located(a, b, energy_ratio, line_hz, leak is None) or _above_leak(a, b, leak))
 
 
 def _above_leak(a: GroupMode, b: GroupMode, leak: dict | None) -> bool:
@@ -190,6 +200,45 @@ def _mark_twins(found, i, fn, zeta, used) -> None:
 #: (energy ratio under its square, 0.0025) may be the stronger mode's copy there, however
 #: well located (:func:`_both_located`; measured on the validation matrix)
 COPY_MAX_AMPLITUDE = 0.05
+
+
+#: two poles whose channel shapes are nearer orthogonal than parallel (MAC below 1/2, an
+#: angle over 45°) are two modes (:func:`_other_channel_shape`)
+CHANNEL_MAC_MAX = 0.5
+
+
+def channel_shape(m: GroupMode, n_channels: int) -> np.ndarray:
+    """The pole's shape over the channels: the first left singular vector of its physical
+    residues as (n_channels, n_points) (channel-major, as the band's FRFs)."""
+    return np.linalg.svd(np.asarray(m.residues).reshape(n_channels, -1), full_matrices=False)[0][:, 0]
+
+
+def _other_channel_shape(a: GroupMode, b: GroupMode, n_channels: int, line_hz: float) -> bool:
+    """Whether the weaker pole ``b`` moves the channels otherwise than ``a`` — another mode,
+    never its copy (session 29).
+
+    In a roving-hammer test the sensors stay put: one mode's FRFs are ψ_c(θ_s) φ(θ_p) g(ω),
+    rank one over (channel, point), so every part of that mode — its share in any order
+    group, a copy from the points' own errors (each point's H (1 − N_F/F)), a lumped mass's
+    mixing, a leak of a grid with gaps — moves the channels as ψ_c does. A pole of another
+    group whose channel shape is nearer orthogonal than parallel to a's (MAC <
+    :data:`CHANNEL_MAC_MAX`) is not a's: the ring's sidewall-coupled same-direction n = 55
+    at 624.7 Hz in group 13 beside the opposite n = 24 at 625.1 Hz in group 10 (0.03 of its
+    half-width, 4 · 10⁻⁵ of its energy: the copy rule's ground) moves tread and sidewall
+    with a MAC of 0.13 against it. ``b`` must be visible (its channel shape measured:
+    :attr:`GroupMode.visibility` ≥ :data:`~tiremodal_cli.modal.groupfit.PEAK_OVER_NOISE`)
+    and pinned (its scatter over the model orders, or a fitted pole's standard error, at
+    most a line, ``line_hz``: located by its own group's data, as :func:`_both_located`
+    asks) — the shape says a pole is no copy, not that it is a mode: a group's stray pole
+    beside a crowd has a shape of its own too (measured: three such rows at the held-out
+    seeds + 1000, 0.76–0.88 Hz scatter on 0.5 Hz lines); with one channel every MAC is 1
+    and the rule says nothing. Measured on the validation matrix: docs/lsce.md, "Channel
+    shapes (session 29)"."""
+    if (n_channels < 2 or line_hz <= 0 or b.visibility < PEAK_OVER_NOISE or b.frequency_std_hz > line_hz
+            or mpc(b.residues) < 0.5):
+        return False
+    u, v = channel_shape(a, n_channels), channel_shape(b, n_channels)
+    return abs(np.vdot(u, v)) ** 2 < CHANNEL_MAC_MAX
 
 
 def _both_located(a: GroupMode, b: GroupMode, energy_ratio: float, line_hz: float, complete: bool = True) -> bool:

@@ -209,7 +209,8 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
         rejected += copies
     orthogonal = orthogonal and not (mixing and mixing["mixed"])  # a lumped mass on the sensors' plane (modal.mixing)
     modes = merge_groups(found, line_hz=band.freq[1] - band.freq[0], min_significance=opt.min_significance,
-                         orthogonal=orthogonal, leak=leakage(point_angle) if gaps else None)
+                         orthogonal=orthogonal, leak=leakage(point_angle) if gaps else None,
+                         n_channels=band.Hb.shape[0])
     if not gaps:  # (with gaps: leak_copies only)
         modes, unseen = under_residual(modes, band.freq[1] - band.freq[0], band.Hb.shape[0], opt.min_significance)
         rejected += unseen
