@@ -10,8 +10,8 @@ dominant pole and a weaker pole of another group within the dominant's half-powe
 half-width. A pair is *two modes* when the generator's truth (the case simulated again) holds
 a mode of the weaker pole's order group (its order folded by the points' aliasing) within
 that half-width of the weaker pole, else a *copy*. Printed: the pairs the rule keeps apart
-(:func:`~tiremodal_cli.modal.merge._other_channel_shape`: the weaker visible and pinned,
-channel-shape MAC under :data:`~tiremodal_cli.modal.merge.CHANNEL_MAC_MAX`) and the others, each split into
+(:func:`~tiremodal_cli.modal.merge._other_channel_shape`: the weaker visible, pinned and a
+normal mode, channel-shape MAC under :data:`~tiremodal_cli.modal.merge.CHANNEL_MAC_MAX`) and the others, each split into
 two modes and copies, and every copy the rule keeps apart (a false split).
 """
 
@@ -30,6 +30,7 @@ import tiremodal_cli.modal.modes as modes_module  # noqa: E402
 from tiremodal_cli.io.frffile import read_frf  # noqa: E402
 from tiremodal_cli.modal.groupfit import PEAK_OVER_NOISE  # noqa: E402
 from tiremodal_cli.modal.lsce import poles_to_modal  # noqa: E402
+from tiremodal_cli.modal.lsfd import mpc  # noqa: E402
 from tiremodal_cli.modal.merge import CHANNEL_MAC_MAX, channel_shape  # noqa: E402
 from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf  # noqa: E402
 from tiremodal_cli.tyre.simulate import simulate  # noqa: E402
@@ -55,10 +56,11 @@ def candidate_pairs(found, n_channels: int, line_hz: float) -> list[dict]:
             out.append({"f_dominant": float(fn[i]), "g_dominant": int(found[i].group), "f": float(fn[j]),
                         "g": int(found[j].group), "half_width": float(zeta[i] * fn[i]),
                         "mac": float(abs(np.vdot(u, v)) ** 2), "visible": bool(found[j].visibility >= PEAK_OVER_NOISE),
-                        "pinned": bool(found[j].frequency_std_hz <= line_hz),
+                        "pinned": bool(found[j].frequency_std_hz <= line_hz), "normal": bool(mpc(found[j].residues) >= 0.5),
                         "energy_ratio": float(energy[j] / energy[i])})
             p = out[-1]
-            p["kept_apart"] = n_channels >= 2 and p["visible"] and p["pinned"] and p["mac"] < CHANNEL_MAC_MAX
+            p["kept_apart"] = (n_channels >= 2 and line_hz > 0 and p["visible"] and p["pinned"] and p["normal"]
+                               and p["mac"] < CHANNEL_MAC_MAX)
     return out
 
 

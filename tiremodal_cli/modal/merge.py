@@ -231,8 +231,11 @@ def _other_channel_shape(a: GroupMode, b: GroupMode, n_channels: int, line_hz: f
     most a line, ``line_hz``: located by its own group's data, as :func:`_both_located`
     asks) — the shape says a pole is no copy, not that it is a mode: a group's stray pole
     beside a crowd has a shape of its own too (measured: three such rows at the held-out
-    seeds + 1000, 0.76–0.88 Hz scatter on 0.5 Hz lines); with one channel every MAC is 1
-    and the rule says nothing. Measured on the validation matrix: docs/lsce.md, "Channel
+    seeds + 1000, 0.76–0.88 Hz scatter on 0.5 Hz lines) — and a normal mode (MPC ≥ 1/2,
+    identify's gate: on noise-free data a fit's stray pole at a strong mode's frequency, in
+    a group its copy leaks into, has a shape of its own, complex — the seed test of
+    ``test_lsce`` at 139.59 Hz, MPC 0.14, beside the same n = 7); with one channel every
+    MAC is 1 and the rule says nothing. Measured on the validation matrix: docs/lsce.md, "Channel
     shapes (session 29)"."""
     if (n_channels < 2 or line_hz <= 0 or b.visibility < PEAK_OVER_NOISE or b.frequency_std_hz > line_hz
             or mpc(b.residues) < 0.5):
