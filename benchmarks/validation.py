@@ -383,6 +383,10 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1294 / 1334 (97 %) | 6 | 12 / 1843 (0.7 %) | 1: mass 4 / 65 | 14 / 14 | 0 |
 | seeds + 2000, session 28 (as above) | a81e46a | paper | 1186 / 1212 (98 %) | 7 | 12 / 1645 (0.7 %) | 0 | 13 / 13 | 0 |
 | | | ring | 1292 / 1334 (97 %) | 8 | 9 / 1829 (0.5 %) | 0 | 14 / 14 | 0 |
+| seeds + 1000, session 29: session 28's code (892ee88) scored by session 29's ruler (an alias above the paper generator's n ≤ 60 counts in the crowd test: paper expected 1212 → 1182) | 892ee88 | paper | 1163 / 1182 (98 %) | 2 | 10 / 1624 (0.6 %) | 0 | 13 / 13 | 0 |
+| | | ring | 1294 / 1334 (97 %) | 6 | 12 / 1843 (0.7 %) | 1: mass 4 / 65 | 14 / 14 | 0 |
+| seeds + 1000, session 29 (a pole of another group that moves the channels otherwise, visible, pinned and a normal mode, is another mode: modal.merge) | 3fd76d9 | paper | 1163 / 1182 (98 %) | 2 | 11 / 1628 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | **1299** / 1334 (97 %) | 4 | 12 / 1848 (0.6 %) | 1: mass 4 / 65 | 14 / 14 | 0 |
 
 Session 24's quieter runs: the same tests with every sensor's noise (force and responses) 5 ×
 and 50 × lower. Nothing the matrix misses is the noise's: the same weak same-direction modes
@@ -553,6 +557,9 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1301 / 1334 (98 %) | 8 / 1836 (0.4 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-29, end of session 28 | a weak mode beside a strong one of its order group fitted by variable projection where the group's residual holds a bandwidth-wide hump, kept on nested fits with its neighbours free, a shape unlike theirs and 3 σ from them (modal.beside; complete symmetric unmixed grids); on a complete grid a weaker pole 3 × its scatter from the stronger is located (the code of a81e46a) | paper | 1193 / 1212 (98 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 7.9 min |
 | | | ring | 1304 / 1334 (98 %) | 10 / 1841 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-29, session 29: the ruler | an alias above the paper generator's n ≤ 60 counts in the crowd test, by the generator's own model (session 28's code, 892ee88, scored again: 30 paper modes leave "expected", 25 of them found, 3 mislabelled, 2 missed) | paper | 1168 / 1182 (99 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | |
+| 2026-11-29, end of session 29 | a pole of another order group that moves the channels otherwise (channel-shape MAC < 1/2), visible, pinned and a normal mode, is another mode, never a copy (modal.merge; the code of 3fd76d9); measured, not adopted: the beside fit on mass-mixed grids, with and without the other groups' poles fixed in its basis (docs/lsce.md, "Channel shapes") | paper | 1168 / 1182 (99 %) | 10 / 1657 (0.6 %) | 0 | 14 / 14 | 13 / 13 | 7.3 min |
+| | | ring | 1306 / 1334 (98 %) | 10 / 1843 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
