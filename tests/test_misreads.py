@@ -9,12 +9,14 @@ orders")."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from threadpoolctl import threadpool_limits
 
 from tiremodal_cli.io.modalfile import read_modal
-from tiremodal_cli.modal.classify import classify
+from tiremodal_cli.modal.classify import Classification, classify
 from tiremodal_cli.modal.misreads import MISREAD_MAX_SIGNIFICANCE, without_misreads
 from tiremodal_cli.modal.modes import ModalResult
 from tiremodal_cli.tyre.simulate import simulate
@@ -93,3 +95,31 @@ def test_the_added_masss_blends_are_not_adopted(tmp_path):
     truth = np.array([m["frequency_hz"] for m in simulate(config_for(case)).truth["modes"]])
     blends = [f for f in dropped if 168.0 < f < 183.5]
     assert len(blends) >= 6 and all(np.min(np.abs(truth / f - 1)) > TOLERANCE for f in blends)
+
+
+@pytest.mark.parametrize("by_channels, crowd, dropped", [(True, True, True), (True, False, False),
+                                                         (False, True, False)])
+def test_a_crowds_blend_kept_apart_by_its_channel_shape_alone_is_dropped(by_channels, crowd, dropped):
+    """A pole the merge kept apart by its channel shape alone (``meta["by_channels"]``) in a
+    crowd of its alias class is a blend: dropped, once, with its reason; either condition
+    alone keeps it (the channel rule's own modes off a crowd; a crowd's rows kept apart by
+    their own groups' data or never merged). The others keep their readings (a blend's pole
+    lies among the orders it stands for: the crowd test reads the dispersion through it)."""
+    res, th = _result([150.0, 160.0, 170.0], [2, 10, 4], [0.6, 0.3, 0.6])
+    res = dataclasses.replace(res, meta={**res.meta, "by_channels": [False, by_channels, False]})
+    calls = []
+
+    def fake(m):  # the crowd flag as a classification would give it: 160 Hz stands for n = 10, 24, 44
+        calls.append(m.freq_hz.size)
+        return [Classification(n=int(n), n_spatial=int(n), n_confidence=1.0, aliased=bool(crowd and f == 160.0),
+                                branch="opposite", branch_confidence=1.0, crowd=bool(crowd and f == 160.0),
+                                n_candidates=(10, 24, 44) if crowd and f == 160.0 else ())
+                for f, n in zip(m.freq_hz, m.group)]
+
+    out, classes = without_misreads(res, fake)
+    assert out.freq_hz.tolist() == ([150.0, 170.0] if dropped else [150.0, 160.0, 170.0])
+    assert len(out.rejected) == int(dropped) and len(classes) == out.freq_hz.size
+    assert out.meta["by_channels"] == ([False, False] if dropped else [False, by_channels, False])
+    if dropped:
+        assert "crowd's blend" in out.rejected[0]["reason"] and "10 24 44" in out.rejected[0]["reason"]
+        assert calls == [3]  # the others keep the reading the blend was part of

@@ -66,6 +66,9 @@ class MergedMode:
     peak: float = 0.0
     group_noise: float = 0.0
     swap_cost: Callable | None = None  # the dominant group's :attr:`GroupMode.swap_cost`
+    # kept apart from a stronger pole of another group by its channel shape alone (the other
+    # rules would have merged it): :func:`~tiremodal_cli.modal.misreads.misread` drops it in a crowd
+    by_channels: bool = False
 
 
 #: probability that one pole seen in two order groups is taken for two modes: the swap test
@@ -127,14 +130,17 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
     structure, :mod:`~tiremodal_cli.modal.symmetry`), when each is located by its own
     group's data (:func:`_both_located`) or, on a grid with gaps (``leak``), one lies above
     what the other can leak into its group (:func:`_above_leak`).
-    The merged mode's shape is the sum of the groups' shares, its pole the dominant group's.
+    The merged mode's shape is the sum of the groups' shares, its pole the dominant group's;
+    a mode kept apart by its channel shape alone, where the others would have merged it, is
+    marked :attr:`MergedMode.by_channels` (in a crowd it is a blend:
+    :func:`~tiremodal_cli.modal.misreads.crowd_blends`).
 
     Returns list of MergedMode, by |pole|.
     """
     thr = scipy.special.chdtri(2, alpha) / 2  # χ² upper quantile (scipy.stats costs 0.4 s to import)
     fn, zeta = poles_to_modal(np.array([f.pole for f in found]))
     energy = np.array([np.linalg.norm(f.residues) ** 2 for f in found])
-    used, out = np.zeros(len(found), dtype=bool), []
+    used, out, by_channels = np.zeros(len(found), dtype=bool), [], set()
     for i in np.argsort(-energy):
         if used[i]:
             continue
@@ -143,17 +149,12 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
         near = sorted((j for j in range(len(found)) if not used[j] and found[j].group != found[i].group
                        and abs(fn[j] - fn[i]) <= zeta[i] * fn[i]), key=lambda j: abs(fn[j] - fn[i]))
         for j in near:
-            floor = abs(fn[j] - fn[i]) <= SAME_POLE_FLOOR_BW * 2 * zeta[i] * fn[i]
-            apart = _pinned_apart(found[i], found[j], fn[i], fn[j], line_hz, min_significance)
-            if _two_modes(found[i], found[j], energy[j] / energy[i], line_hz, n_channels, orthogonal, leak):
-                continue
-            if found[j].group not in groups_seen and (floor or (not apart and (found[j].swap_cost(found[i].pole) <= thr
-                                                                               or found[i].swap_cost(found[j].pole) <= thr))):
-                # one normal mode seen twice: its shares add up in phase; a share that would
-                # turn a normal mode (MPC ≥ 0.5, identify's gate) into none is not its own
-                now = sum(found[q].residues for q in groups_seen.values())
-                if not (mpc(now) >= 0.5 > mpc(now + found[j].residues)):
-                    groups_seen[found[j].group] = j
+            how = _joins(found, i, j, groups_seen, fn, zeta, energy[j] / energy[i], thr, line_hz, min_significance,
+                         n_channels, orthogonal, leak)
+            if how == "channels":  # another mode by its channel shape alone (merged otherwise)
+                by_channels.add(j)
+            elif how == "same":
+                groups_seen[found[j].group] = j
         phys = sum(found[j].residues for j in groups_seen.values())
         tot = sum(energy[j] for j in groups_seen.values())
         for j in groups_seen.values():
@@ -161,18 +162,40 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
         out.append(MergedMode(found[i].pole, found[i].group, phys, found[i].significance,
                               {int(found[j].group): float(energy[j] / tot) for j in groups_seen.values()},
                               found[i].significance_in_group, found[i].frequency_std_hz, found[i].peak,
-                              found[i].group_noise, found[i].swap_cost))
+                              found[i].group_noise, found[i].swap_cost, i in by_channels))
     out.sort(key=lambda m: abs(m.pole))
     return out
 
 
+def _joins(found, i, j, groups_seen: dict, fn, zeta, ratio, thr, line_hz, min_significance, n_channels, orthogonal,
+           leak) -> str | None:
+    """How the weaker pole ``j`` of another group meets the dominant ``i``'s mode
+    (:func:`merge_groups`): "same" (one pole: its share is added), "channels" (another mode
+    by its channel shape alone, where the other rules would have merged it) or None."""
+    a, b = found[i], found[j]
+    two = _two_modes(a, b, ratio, line_hz, n_channels, orthogonal, leak)
+    if two == "located" or b.group in groups_seen:
+        return None
+    floor = abs(fn[j] - fn[i]) <= SAME_POLE_FLOOR_BW * 2 * zeta[i] * fn[i]
+    apart = _pinned_apart(a, b, fn[i], fn[j], line_hz, min_significance)
+    if not (floor or (not apart and (b.swap_cost(a.pole) <= thr or a.swap_cost(b.pole) <= thr))):
+        return None
+    # one normal mode seen twice: its shares add up in phase; a share that would turn a
+    # normal mode (MPC ≥ 0.5, identify's gate) into none is not its own
+    now = sum(found[q].residues for q in groups_seen.values())
+    if mpc(now) >= 0.5 > mpc(now + b.residues):
+        return None
+    return "channels" if two == "channels" else "same"
+
+
 def _two_modes(a: GroupMode, b: GroupMode, energy_ratio: float, line_hz: float, n_channels: int, orthogonal: bool,
-               leak) -> bool:
+               leak) -> str | None:
     """Whether the weaker ``b`` of another group is another mode than ``a`` however close
-    (:func:`merge_groups`)."""
-    if _other_channel_shape(a, b, n_channels, line_hz):
-        return True
-    return orthogonal and (_both_located(a, b, energy_ratio, line_hz, leak is None) or _above_leak(a, b, leak))
+    (:func:`merge_groups`), and by which rule: "located" (each located by its own group's
+    data, or above a's leak), "channels" (by its channel shape alone), or None."""
+    if orthogonal and (_both_located(a, b, energy_ratio, line_hz, leak is None) or _above_leak(a, b, leak)):
+        return "located"
+    return "channels" if _other_channel_shape(a, b, n_channels, line_hz) else None
 
 
 def _above_leak(a: GroupMode, b: GroupMode, leak: dict | None) -> bool:
@@ -235,8 +258,11 @@ def _other_channel_shape(a: GroupMode, b: GroupMode, n_channels: int, line_hz: f
     identify's gate: on noise-free data a fit's stray pole at a strong mode's frequency, in
     a group its copy leaks into, has a shape of its own, complex — the seed test of
     ``test_lsce`` at 139.59 Hz, MPC 0.14, beside the same n = 7); with one channel every
-    MAC is 1 and the rule says nothing. Measured on the validation matrix: docs/lsce.md, "Channel
-    shapes (session 29)"."""
+    MAC is 1 and the rule says nothing. The argument needs ``b`` to be one mode: in a crowd of
+    its alias class one pole stands for several, and a pole kept apart by this rule alone is
+    then dropped after the classification (session 30,
+    :func:`~tiremodal_cli.modal.misreads.crowd_blends`). Measured on the validation matrix:
+    docs/lsce.md, "Channel shapes (session 29)" and "Crowd blends (session 30)"."""
     if (n_channels < 2 or line_hz <= 0 or b.visibility < PEAK_OVER_NOISE or b.frequency_std_hz > line_hz
             or mpc(b.residues) < 0.5):
         return False

@@ -38,6 +38,22 @@ sidewall resonance seen in a low group) 0.037–0.49, 38 of them below 0.15. 0.1
 the gap, 1.6 × above the largest blend and 1.9 × below the weakest true mode. A true
 off-branch mode under 15 % of the response in its half-power band would be lost (none in
 the matrix).
+
+**Crowd blends** (session 30; :func:`crowd_blends`). The merge keeps a weaker pole of another
+order group apart from a stronger one when it moves the channels otherwise
+(:func:`~tiremodal_cli.modal.merge._other_channel_shape`: one mode's FRFs are rank one over
+channel and point, so every copy of it moves the channels as it does). That argument needs
+each pole to be one mode. Where orders of a pole's alias class crowd within its half-power
+bandwidth (the classification's crowd: the paper's same-direction orders under the sidewall
+resonance, mixed by an added mass), one pole of a group stands for several modes, biased
+between them, and its channel shape is their blend's: a shape of its own, no evidence of a
+mode. A pole kept apart by its channel shape alone (the other rules would have merged it:
+:attr:`~tiremodal_cli.modal.merge.MergedMode.by_channels`) and found in a crowd is dropped —
+all such poles at once, as the first reading found them, and the rest classified again
+(dropped one at a time, each new reading lost the dispersion through the crowd and kept the
+last blend as a mode: the paper added mass at seeds + 2000, 158.83 Hz read n = 10
+opposite out of the crowd). Measured:
+docs/lsce.md, "Crowd blends (session 30)".
 """
 
 from __future__ import annotations
@@ -46,7 +62,7 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["MISREAD_MAX_SIGNIFICANCE", "misread", "without_misreads"]
+__all__ = ["MISREAD_MAX_SIGNIFICANCE", "misread", "crowd_blends", "without_misreads"]
 
 #: a mode out of its branch's order at its spatial order must explain at least this share
 #: of the physical response in its half-power band (measured on the matrix: see above)
@@ -83,15 +99,15 @@ def without_misreads(res, classify_modes):
 
     Returns
     -------
-    (ModalResult, list of Classification): the misreads dropped one at a time (the least
-    significant first; the others classified again after each drop), each added to
-    ``res.rejected`` with its reason.
+    (ModalResult, list of Classification): the crowd's blends (:func:`crowd_blends`) dropped
+    first, all at once, then the misreads one at a time (the least significant first; the
+    others classified again after each drop), each added to ``res.rejected`` with its reason.
     """
     classes = classify_modes(res)
     while True:
         bad = np.flatnonzero(misread(classes, res.freq_hz, res.damping_ratio, res.significance))
         if bad.size == 0:  # (a mode is out of order only beside a more significant one in order)
-            return res, classes
+            return _without_blends(res, classes)
         i = int(bad[np.argmin(res.significance[bad])])
         c = classes[i]
         why = {"frequency_hz": float(res.freq_hz[i]), "damping_ratio": float(res.damping_ratio[i]),
@@ -104,10 +120,43 @@ def without_misreads(res, classify_modes):
         classes = classify_modes(res)
 
 
+def _without_blends(res, classes):
+    """``res`` and ``classes`` without the crowd's blends (:func:`crowd_blends`), the others'
+    readings kept: a blend's pole lies among the orders it stands for, and the crowd test
+    reads the branch's dispersion through it (module docstring, "Crowd blends")."""
+    blends = np.flatnonzero(crowd_blends(classes, res.meta.get("by_channels")))
+    if blends.size == 0:
+        return res, classes
+    keep = np.setdiff1d(np.arange(len(classes)), blends)
+    new = {int(k): j for j, k in enumerate(keep)}  # a split pair's id is its first member's index
+    for i in blends[::-1]:
+        c = classes[i]
+        why = {"frequency_hz": float(res.freq_hz[i]), "damping_ratio": float(res.damping_ratio[i]),
+               "group": int(res.group[i]),
+               "reason": "a crowd's blend: kept apart from a stronger pole of another order group by its shape over "
+                         "the channels alone, while orders of its alias class crowd within its bandwidth (n = "
+                         f"{' '.join(str(k) for k in c.n_candidates)}): one pole standing for several modes moves "
+                         "the channels as none of them does, so that shape is no evidence of a mode"}
+        res = _taken(res, np.delete(np.arange(res.freq_hz.size), i), why)
+    out = [classes[k] if classes[k].pair is None or classes[k].pair in new and any(
+        classes[q].pair == classes[k].pair for q in keep if q != k) else
+        dataclasses.replace(classes[k], pair=None, splitting_hz=None) for k in keep]
+    return res, [c if c.pair is None else dataclasses.replace(c, pair=new[c.pair]) for c in out]
+
+
+def crowd_blends(classes, by_channels) -> np.ndarray:
+    """(n_modes,) bool: the modes that the merge kept apart by their channel shape alone
+    (``by_channels``, one bool per mode; None: none) and that the classification finds in a
+    crowd — several orders of their alias class within one half-power bandwidth (module
+    docstring, "Crowd blends")."""
+    flag = np.zeros(len(classes), dtype=bool) if by_channels is None else np.asarray(by_channels, dtype=bool)
+    return flag & np.array([c is not None and bool(c.crowd) for c in classes], dtype=bool)
+
+
 def _taken(res, keep, rejected: dict):
     """``res`` with only the modes ``keep`` (the synthesis stays the order groups' fit)."""
     meta = dict(res.meta)
-    for key in ("order_energy", "significance_in_group"):
+    for key in ("order_energy", "significance_in_group", "by_channels"):
         if key in meta and meta[key] is not None:
             meta[key] = [meta[key][k] for k in keep]
     std = None if res.frequency_std_hz is None else res.frequency_std_hz[keep]

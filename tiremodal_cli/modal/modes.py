@@ -279,7 +279,8 @@ def _result(band: _Band, shape, modes, synth, exp_tau_s, *, diagrams, rejected, 
     syn[live] = synth.reshape(n_live, n_p, -1)
     f_true, z_true = poles_to_modal(correct_poles(s, exp_tau_s))
     meta = {**meta, "order_energy": [m.order_energy for m in modes],
-            "significance_in_group": [m.significance_in_group for m in modes]}
+            "significance_in_group": [m.significance_in_group for m in modes],
+            "by_channels": [m.by_channels for m in modes]}
     return ModalResult(freq_hz=f_true, damping_ratio=z_true, poles=s, shapes=shapes,
                        mpc=np.array([mpc(m.residues) for m in modes]),
                        significance=np.array([m.significance for m in modes]),
