@@ -48,12 +48,13 @@ bandwidth (the classification's crowd: the paper's same-direction orders under t
 resonance, mixed by an added mass), one pole of a group stands for several modes, biased
 between them, and its channel shape is their blend's: a shape of its own, no evidence of a
 mode. A pole kept apart by its channel shape alone (the other rules would have merged it:
-:attr:`~tiremodal_cli.modal.merge.MergedMode.by_channels`) and found in a crowd is dropped —
-all such poles at once, as the first reading found them, and the rest classified again
-(dropped one at a time, each new reading lost the dispersion through the crowd and kept the
-last blend as a mode: the paper added mass at seeds + 2000, 158.83 Hz read n = 10
-opposite out of the crowd). Measured:
-docs/lsce.md, "Crowd blends (session 30)".
+:attr:`~tiremodal_cli.modal.merge.MergedMode.by_channels`) and found in a crowd is dropped
+once the misreads are (:func:`_without_blends`), and the other modes keep the readings the
+blend was part of: its pole lies among the orders it stands for, and the crowd test reads
+the branch's dispersion through it (classified again without the blends, the paper's added
+mass at seeds + 2000 read its clear n = 9 at 153.07 Hz as a crowd of n = 9 and 25: the
+dispersion interpolated across the gap the blends left). Measured: docs/lsce.md, "Crowd
+blends (session 30)".
 """
 
 from __future__ import annotations
@@ -99,9 +100,9 @@ def without_misreads(res, classify_modes):
 
     Returns
     -------
-    (ModalResult, list of Classification): the crowd's blends (:func:`crowd_blends`) dropped
-    first, all at once, then the misreads one at a time (the least significant first; the
-    others classified again after each drop), each added to ``res.rejected`` with its reason.
+    (ModalResult, list of Classification): the misreads dropped one at a time (the least
+    significant first; the others classified again after each drop), then the crowd's
+    blends (:func:`_without_blends`), each added to ``res.rejected`` with its reason.
     """
     classes = classify_modes(res)
     while True:
