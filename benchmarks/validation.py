@@ -387,6 +387,16 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1294 / 1334 (97 %) | 6 | 12 / 1843 (0.7 %) | 1: mass 4 / 65 | 14 / 14 | 0 |
 | seeds + 1000, session 29 (a pole of another group that moves the channels otherwise, visible, pinned and a normal mode, is another mode: modal.merge) | 3fd76d9 | paper | 1163 / 1182 (98 %) | 2 | 11 / 1628 (0.7 %) | 0 | 13 / 13 | 0 |
 | | | ring | **1299** / 1334 (97 %) | 4 | 12 / 1848 (0.6 %) | 1: mass 4 / 65 | 14 / 14 | 0 |
+| seeds + 2000, session 30: session 29's code (934e993) run again, on an Intel Xeon (AVX-512) where sessions 26–29 ran on an AMD EPYC | 934e993 | paper | 1162 / 1182 (98 %) | 3 | 14 / 1647 (0.9 %) | **1: added mass 3 / 47** (158.83, 161.68 Hz: the same-direction crowd's blends, kept apart by session 29's channel rule; 1 / 47 without it) | 13 / 13 | 0 |
+| | | ring | 1297 / 1334 (97 %) | 7 | 8 / 1835 (0.4 %) | 0 | 14 / 14 | 0 |
+| seeds + 3000, the same | 934e993 | paper | 1167 / 1182 (99 %) | 3 | 13 / 1648 (0.8 %) | **1: added mass 3 / 50** (161.66, 161.76, 257.69 Hz) | 13 / 13 | 0 |
+| | | ring | 1305 / 1334 (98 %) | 4 | 14 / 1849 (0.8 %) | 0 | 14 / 14 | 0 |
+| seeds + 2000, session 30 (a pole kept apart by its channel shape alone, in a crowd of its alias class, is a blend: dropped; modal.misreads) | 6d57eb6 | paper | 1162 / 1182 (98 %) | 3 | **12** / 1644 (0.7 %) | **0** | 13 / 13 | 0 |
+| | | ring | 1297 / 1334 (97 %) | 7 | 8 / 1835 (0.4 %) | 0 | 14 / 14 | 0 |
+| seeds + 3000, the same | 6d57eb6 | paper | 1167 / 1182 (99 %) | 3 | 13 / 1647 (0.8 %) | 1: added mass 3 / 50 (161.66 Hz is read n = 11 opposite, out of the crowd, so no crowd's blend; 161.76 Hz was never kept apart by the channel rule) | 13 / 13 | 0 |
+| | | ring | 1305 / 1334 (98 %) | 4 | 14 / 1849 (0.8 %) | 0 | 14 / 14 | 0 |
+| seeds + 1000, session 30 (as above; on this machine session 29's code was run again on the six mass and coupling cases only: unchanged there but the added mass and tangential + added mass's adopted rows 46 → 43, 45 → 43, crowd rows on truth modes) | 6d57eb6 | paper | 1163 / 1182 (98 %) | 2 | 11 / 1622 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | 1299 / 1334 (97 %) | 4 | 13 / 1850 (0.7 %) | 1: mass 4 / 65 | 14 / 14 | 0 |
 
 Session 24's quieter runs: the same tests with every sensor's noise (force and responses) 5 ×
 and 50 × lower. Nothing the matrix misses is the noise's: the same weak same-direction modes
@@ -560,6 +570,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | 2026-11-29, session 29: the ruler | an alias above the paper generator's n ≤ 60 counts in the crowd test, by the generator's own model (session 28's code, 892ee88, scored again: 30 paper modes leave "expected", 25 of them found, 3 mislabelled, 2 missed) | paper | 1168 / 1182 (99 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | |
 | 2026-11-29, end of session 29 | a pole of another order group that moves the channels otherwise (channel-shape MAC < 1/2), visible, pinned and a normal mode, is another mode, never a copy (modal.merge; the code of 3fd76d9); measured, not adopted: the beside fit on mass-mixed grids, with and without the other groups' poles fixed in its basis (docs/lsce.md, "Channel shapes") | paper | 1168 / 1182 (99 %) | 10 / 1657 (0.6 %) | 0 | 14 / 14 | 13 / 13 | 7.3 min |
 | | | ring | 1306 / 1334 (98 %) | 10 / 1843 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-29, end of session 30 | a pole kept apart by its channel shape alone that the classification finds in a crowd of its alias class is a blend, dropped (modal.misreads; the code of 6d57eb6). Run on an Intel Xeon (AVX-512), where sessions 26–29 ran on an AMD EPYC: session 29's code here gives ring 1307 / 1334, 10 / 1845 (on the EPYC 1306, 10 / 1843), paper as there | paper | 1168 / 1182 (99 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 23 min (a clean-clone CI beside it) |
+| | | ring | 1307 / 1334 (98 %) | 10 / 1845 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
