@@ -9,6 +9,7 @@ the suite quick; the batch machinery is the same.
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import csv
 import dataclasses
 import json
@@ -25,6 +26,7 @@ import numpy as np
 import pytest
 
 from tiremodal_cli.workflow.batch import BatchConfig, load_config, run_batch
+from tiremodal_cli.workflow.executors import as_completed
 from tiremodal_cli.workflow.discovery import BatchTest, discover, source_sha256
 from tiremodal_cli.workflow.summary import read_summary
 from tiremodal_cli.cli.simulate import mapping_toml
@@ -222,6 +224,21 @@ def test_ctrl_c_stops_the_workers_and_exits_130(tmp_path, campaign):
 def _comparable(recs):
     drop = {"seconds", "pipeline_seconds", "output"}
     return [{k: v for k, v in r.items() if k not in drop} for r in recs]
+
+
+def test_ctrl_c_is_raised_between_results_not_inside_the_callers_work():
+    """While the batch handles a finished test, a Ctrl-C waits for the next result: it is
+    raised from the wait, once, and Python's own handler is back afterwards."""
+    before = signal.getsignal(signal.SIGINT)
+    first, second = cf.Future(), cf.Future()
+    first.set_result(1)
+    results = as_completed([first, second], poll_s=0.01)
+    assert next(results) is first
+    os.kill(os.getpid(), signal.SIGINT)  # arrives while the caller works on `first`
+    time.sleep(0.05)  # the handler runs here, and the caller's work goes on
+    with pytest.raises(KeyboardInterrupt):
+        next(results)
+    assert signal.getsignal(signal.SIGINT) is before
 
 
 def test_dask_gives_the_same_summary(tmp_path, campaign):

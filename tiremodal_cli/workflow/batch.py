@@ -27,7 +27,6 @@ holds the campaign's configuration, one test's job and the batch itself.
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import contextlib
 import json
 import os
@@ -49,7 +48,7 @@ from tiremodal_cli.io.ingest.uff import uff_files
 from tiremodal_cli.io.measurement import write_measurement
 from tiremodal_cli.tyre.model import NOMINAL_RIM_KG, TyreParameters
 from tiremodal_cli.workflow.discovery import BatchTest, discover, source_sha256
-from tiremodal_cli.workflow.executors import SerialExecutor, dask_client_class, executor
+from tiremodal_cli.workflow.executors import SerialExecutor, as_completed, dask_client_class, executor
 from tiremodal_cli.workflow.manifest import is_complete, read_manifest
 from tiremodal_cli.workflow.pipeline import run
 from tiremodal_cli.workflow.run_options import RunOptions
@@ -273,7 +272,7 @@ def _execute(todo: Sequence[Job], outdir: Path, records: _Records, *, jobs: int,
     (a killed batch keeps its rows) and ``progress(record, done)`` called."""
     with executor(jobs, scheduler, workers_lock=outdir / WORKERS_LOCK) as ex:
         futures = {ex.submit(run_one, j): j for j in todo}
-        for fut in cf.as_completed(futures):
+        for fut in as_completed(futures):
             j = futures[fut]
             try:
                 rec = fut.result()

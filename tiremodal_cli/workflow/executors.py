@@ -8,6 +8,7 @@ import contextlib
 import ctypes
 import multiprocessing as mp
 import os
+import signal
 import sys
 import threading
 import time
@@ -15,7 +16,7 @@ from collections.abc import Iterator
 
 from tiremodal_cli.errors import ParameterError
 
-__all__ = ["SerialExecutor", "dask_client_class", "executor"]
+__all__ = ["SerialExecutor", "as_completed", "dask_client_class", "executor"]
 
 
 class SerialExecutor(cf.Executor):
@@ -64,9 +65,16 @@ def _die_with(parent_pid: int) -> None:
 
 
 def _worker_init(parent_pid: int, workers_lock: str | None) -> None:
-    """A pool worker's start: die with the batch; hold a shared lock on ``workers_lock``
-    so that no other batch takes OUTDIR while this worker lives (see :func:`_lock`)."""
+    """A pool worker's start: die with the batch; ignore Ctrl-C; hold a shared lock on
+    ``workers_lock`` so that no other batch takes OUTDIR while this worker lives.
+
+    Ctrl-C reaches the terminal's whole process group. A worker that took it would raise
+    KeyboardInterrupt wherever it happened to be, also inside a garbage collector's weakref
+    callback, where Python prints "Exception ignored ... Traceback" to the shared stderr.
+    The batch alone answers Ctrl-C: it ends its workers (:func:`_stop`).
+    """
     global _WORKER_LOCK
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     _die_with(parent_pid)
     if workers_lock is not None:
         try:
@@ -110,6 +118,34 @@ def executor(jobs: int = 1, scheduler: str | None = None, *, workers_lock=None) 
         raise
     else:
         pool.shutdown(wait=True)
+
+
+def as_completed(futures, *, poll_s: float = 0.1) -> Iterator[cf.Future]:
+    """The futures as they finish (``concurrent.futures.as_completed``), with Ctrl-C raised
+    here, between results, as KeyboardInterrupt.
+
+    While it waits, SIGINT only sets a flag (in the main thread; elsewhere the handler
+    cannot be set and Ctrl-C acts as usual). Python's own handler raises KeyboardInterrupt
+    at whatever line runs, and a line inside a weakref callback swallows it with a printed
+    traceback; here it comes from one place, at most ``poll_s`` (s) after the signal.
+    """
+    pending = set(futures)
+    if threading.current_thread() is not threading.main_thread():
+        yield from cf.as_completed(pending)
+        return
+    hit: list[int] = []  # a list, not an Event: the handler takes no lock
+    old = signal.signal(signal.SIGINT, lambda signum, frame: hit.append(signum))
+    try:
+        while pending:
+            done, pending = cf.wait(pending, timeout=poll_s, return_when=cf.FIRST_COMPLETED)
+            for fut in done:
+                if hit:
+                    raise KeyboardInterrupt
+                yield fut
+            if hit:
+                raise KeyboardInterrupt
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 def dask_client_class():
