@@ -134,3 +134,25 @@ def test_a_located_mode_is_not_merged_into_an_unlocated_blend_of_another_order()
     assert len(merge_groups([pinned, wanders], line_hz=0.5, orthogonal=True)) == 1
     apart = _group_mode(843.64, 0, np.sqrt(0.43), 2.0, accepts_any=True)  # 6.5 Hz > 3 × 2.0 Hz
     assert len(merge_groups([pinned, apart], line_hz=0.5, orthogonal=True)) == 2
+
+
+def test_a_pole_without_a_peak_of_its_own_is_the_stronger_modes_copy():
+    """The matrix's held-out ring with a lumped mass (seed + 1000): the opposite n = 20 at
+    508.6 Hz (group 14) shows in group 1 as a pole at 505.7 Hz — 0.5 % low, its peak 1.7 ×
+    the residual RMS of the row that shows it best, scattered 2.3 Hz over the model orders —
+    whose group's data reject the stronger pole (swap cost 11.5 against 6.9). Neither on a
+    peak of its own (under ``PEAK_OVER_NOISE``) nor pinned by its data (scatter over a
+    line), nothing tells it from the stronger mode's copy: one mode (session 31). The same
+    pole on a peak of its own, or pinned within a line (the sidewall coupling + mass's
+    same n = 43 at 499.82 Hz: 2.7 × its row's residual, 0.05 Hz scatter, beside the
+    opposite n = 20 of group 14), stays for the swap test to judge, which keeps it apart."""
+    import dataclasses
+
+    from tiremodal_cli.modal.groupfit import PEAK_OVER_NOISE
+    from tiremodal_cli.modal.merge import merge_groups
+    strong = _group_mode(508.59, 14, 1.0, 0.3, accepts_any=False)
+    weak = dataclasses.replace(_group_mode(505.67, 1, 0.067, 2.26, accepts_any=False), visibility=1.7)
+    assert weak.visibility < PEAK_OVER_NOISE
+    assert len(merge_groups([strong, weak], line_hz=0.5)) == 1
+    assert len(merge_groups([strong, dataclasses.replace(weak, visibility=5.0)], line_hz=0.5)) == 2
+    assert len(merge_groups([strong, dataclasses.replace(weak, frequency_std_hz=0.05)], line_hz=0.5)) == 2

@@ -120,7 +120,11 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
     (:func:`swap_cost`: 2ΔE below the χ²(2) quantile 1 − ``alpha``; either way one pole
     serves both groups — with a broken symmetry the weaker copy is at times the better
     estimate), or lies within :data:`SAME_POLE_FLOOR_BW` of a bandwidth (the estimator's
-    bias) — and adding its share does not turn a normal mode (MPC ≥ 0.5) into none;
+    bias), or neither stands on a peak of its own in its group (:attr:`GroupMode.visibility`
+    under :data:`~tiremodal_cli.modal.groupfit.PEAK_OVER_NOISE`) nor is pinned by its data
+    (its scatter over the model orders over a line, ``line_hz``) — nothing then tells it
+    from a copy, whose pole a lumped mass's mixing biases by more than the swap test allows
+    (session 31) — and adding its share does not turn a normal mode (MPC ≥ 0.5) into none;
     two modes of neighbouring orders (the opposite branch's n = 0 and 1 lie 0.15 % apart,
     a twentieth of a bandwidth) are rejected by their own data, however close; two weak
     poles pinned apart are two modes (:func:`_pinned_apart`; ``line_hz`` (Hz, 0: not
@@ -177,8 +181,10 @@ def _joins(found, i, j, groups_seen: dict, fn, zeta, ratio, thr, line_hz, min_si
     if two == "located" or b.group in groups_seen:
         return None
     floor = abs(fn[j] - fn[i]) <= SAME_POLE_FLOOR_BW * 2 * zeta[i] * fn[i]
+    # neither on a peak of its own nor pinned by its group's data: nothing tells it from a's copy
+    unseen = line_hz > 0 and b.visibility < PEAK_OVER_NOISE and b.frequency_std_hz > line_hz
     apart = _pinned_apart(a, b, fn[i], fn[j], line_hz, min_significance)
-    if not (floor or (not apart and (b.swap_cost(a.pole) <= thr or a.swap_cost(b.pole) <= thr))):
+    if not (floor or unseen or (not apart and (b.swap_cost(a.pole) <= thr or a.swap_cost(b.pole) <= thr))):
         return None
     # one normal mode seen twice: its shares add up in phase; a share that would turn a
     # normal mode (MPC ≥ 0.5, identify's gate) into none is not its own
