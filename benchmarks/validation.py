@@ -397,6 +397,22 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1305 / 1334 (98 %) | 4 | 14 / 1849 (0.8 %) | 0 | 14 / 14 | 0 |
 | seeds + 1000, session 30 (as above; on this machine session 29's code was run again on the six mass and coupling cases only: unchanged there but the added mass and tangential + added mass's adopted rows 46 → 43, 45 → 43, crowd rows on truth modes) | 6d57eb6 | paper | 1163 / 1182 (98 %) | 2 | 11 / 1622 (0.7 %) | 0 | 13 / 13 | 0 |
 | | | ring | 1299 / 1334 (97 %) | 4 | 13 / 1850 (0.7 %) | 1: mass 4 / 65 | 14 / 14 | 0 |
+| seeds + 1000, session 31 (a pole of another order group neither on a peak of its own nor pinned by its data is the stronger mode's copy: modal.merge) | 79ad8b0 | paper | 1163 / 1182 (98 %) | 2 | 11 / 1622 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | 1299 / 1334 (97 %) | 4 | **10** / 1847 (0.5 %) | **0** (mass 3 / 64: its copy of the opposite n = 20 at 505.66 Hz merged) | 14 / 14 | 0 |
+| seeds + 2000, session 31 (as above) | 79ad8b0 | paper | 1162 / 1182 (98 %) | 3 | 12 / 1644 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | 1297 / 1334 (97 %) | 7 | 8 / 1834 (0.4 %) | 0 | 14 / 14 | 0 |
+| seeds + 3000, session 31 (as above) | 79ad8b0 | paper | 1167 / 1182 (99 %) | 3 | **12** / 1646 (0.7 %) | **0** (added mass 2 / 49: its row at 257.69 Hz, a copy of the opposite n = 10, merged) | 13 / 13 | 0 |
+| | | ring | 1305 / 1334 (98 %) | 4 | 14 / 1849 (0.8 %) | 0 | 14 / 14 | 0 |
+
+Session 31's rows, case by case against session 30's (6d57eb6) at the same seeds on the same
+machine: at + 1000 the ring's noise case loses a spurious row (224.82 Hz), its sidewall coupling
+finds its same n = 61 and the coupling + mass loses its n = 42 (489.52 Hz) and a spurious row
+(426.39 Hz), the mass its copy at 505.66 Hz; at + 2000 one ring row fewer, none spurious or
+found; at + 3000 the added mass's 257.69 Hz. At the matrix's seeds (below) the ring's
+5,120 Hz mobility combination loses a spurious row (1,311.55 Hz) and the sidewall coupling +
+mass its weak same n = 64 (721.12 Hz: a pole 2.1 × its row's residual, scattered 1.8 Hz over
+the model orders, 6.6 Hz from the opposite n = 26 of another group). For the first time no
+case is over 5 % spurious at any of the four seeds; every diagnosis is right at all four.
 
 Session 24's quieter runs: the same tests with every sensor's noise (force and responses) 5 ×
 and 50 × lower. Nothing the matrix misses is the noise's: the same weak same-direction modes
@@ -572,6 +588,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1306 / 1334 (98 %) | 10 / 1843 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-29, end of session 30 | a pole kept apart by its channel shape alone that the classification finds in a crowd of its alias class is a blend, dropped (modal.misreads; the code of 6d57eb6). Run on an Intel Xeon (AVX-512), where sessions 26–29 ran on an AMD EPYC: session 29's code here gives ring 1307 / 1334, 10 / 1845 (on the EPYC 1306, 10 / 1843), paper as there | paper | 1168 / 1182 (99 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 23 min (a clean-clone CI beside it) |
 | | | ring | 1307 / 1334 (98 %) | 10 / 1845 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-29, end of session 31 | a pole of another order group within the stronger mode's half-power half-width, neither on a peak of its own (under 3 × its row's residual) nor pinned by its data (scatter over a line), is the stronger mode's copy (modal.merge; the code of 79ad8b0): held out, no case over 5 % spurious at any seed | paper | 1168 / 1182 (99 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 19 min (`--jobs 1`, another matrix beside it) |
+| | | ring | 1306 / 1334 (98 %) | 9 / 1842 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
