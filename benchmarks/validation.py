@@ -411,7 +411,7 @@ finds its same n = 61 and the coupling + mass loses its n = 42 (489.52 Hz) and a
 found; at + 3000 the added mass's 257.69 Hz. At the matrix's seeds (below) the ring's
 5,120 Hz mobility combination loses a spurious row (1,311.55 Hz) and the sidewall coupling +
 mass its weak same n = 64 (721.12 Hz: a pole 2.1 × its row's residual, scattered 1.8 Hz over
-the model orders, 6.6 Hz from the opposite n = 26 of another group). For the first time no
+the model orders, 6.6 Hz from the opposite n = 27 of group 7). For the first time no
 case is over 5 % spurious at any of the four seeds; every diagnosis is right at all four.
 
 Session 24's quieter runs: the same tests with every sensor's noise (force and responses) 5 ×
