@@ -76,7 +76,9 @@ def test_an_added_masss_leaks_are_dropped_and_no_mode_lost(ring_mass):
     rec, rejected, _, _ = ring_mass
     assert rec["status"] == "ok"
     leaks = [r["frequency_hz"] for r in rejected if r["reason"].startswith(("a leak of", "the same pole"))]
-    assert any(r["reason"].startswith("the same pole") for r in rejected)
+    # the leak rules drop the mass's copies (the leak twin they dropped until session 30, at
+    # 332.45 Hz, is merged before them since session 31: no peak of its own, not pinned)
+    assert leaks
     for f in leaks:
         near = [d for d in rec["detail"] if abs(d["frequency_hz"] / f - 1) <= TOLERANCE]
         assert all(d["status"] == "found" for d in near), (f, near)

@@ -120,11 +120,8 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
     (:func:`swap_cost`: 2ΔE below the χ²(2) quantile 1 − ``alpha``; either way one pole
     serves both groups — with a broken symmetry the weaker copy is at times the better
     estimate), or lies within :data:`SAME_POLE_FLOOR_BW` of a bandwidth (the estimator's
-    bias), or neither stands on a peak of its own in its group (:attr:`GroupMode.visibility`
-    under :data:`~tiremodal_cli.modal.groupfit.PEAK_OVER_NOISE`) nor is pinned by its data
-    (its scatter over the model orders over a line, ``line_hz``) — nothing then tells it
-    from a copy, whose pole a lumped mass's mixing biases by more than the swap test allows
-    (session 31) — and adding its share does not turn a normal mode (MPC ≥ 0.5) into none;
+    bias), or is neither visible in its group nor pinned by its data (session 31: nothing
+    tells it from a copy, which a lumped mass's mixing biases beyond the swap test) — and adding its share does not turn a normal mode (MPC ≥ 0.5) into none;
     two modes of neighbouring orders (the opposite branch's n = 0 and 1 lie 0.15 % apart,
     a twentieth of a bandwidth) are rejected by their own data, however close; two weak
     poles pinned apart are two modes (:func:`_pinned_apart`; ``line_hz`` (Hz, 0: not
