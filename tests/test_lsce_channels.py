@@ -70,3 +70,30 @@ def test_a_strong_modes_copies_stay_one_mode(seed):
     res = _estimate(*_frfs(seed, [STRONG], copy_error=0.01))
     near = np.flatnonzero(np.abs(res.freq_hz - 150.0) < 3.0)
     assert res.group[near].tolist() == [3], (res.freq_hz, res.group)
+
+
+def test_a_mode_blended_with_the_stronger_ones_copy_is_judged_without_it():
+    """The channel rule's normal-mode check reads the weaker pole's part that the stronger
+    mode's copy cannot hold: its residues with the stronger one's channel shape projected
+    out (session 31; the sidewall coupling + mass's same n = 49 at 562.40 Hz, MPC 0.31 as a
+    whole, 0.95 so). A mode (tread and sidewall opposite, a real shape over the points)
+    blended with a copy of the stronger mode (its channel shape, a complex share) is another
+    mode; a stray pole whose own part is complex over the points is not, and merges."""
+    import dataclasses
+
+    from tiremodal_cli.modal.merge import GroupMode, merge_groups, mpc
+    theta = 2 * np.pi * np.arange(34) / 34
+    u_a, psi = np.array([1.0, 0.6]), np.array([1.0, -1.2])
+
+    def mode(f_hz, group, residues):
+        pole = 2 * np.pi * f_hz * complex(-ZETA, np.sqrt(1 - ZETA**2))
+        return GroupMode(pole, group, residues.ravel(), 0.3, 0.05, lambda s: 0.0, 0.9, 1e-3, 1.0, 50.0)
+
+    strong = mode(563.97, 12, 10 * np.outer(u_a, np.cos(12 * theta)).astype(complex))
+    copy = 0.8 * np.exp(1.3j) * np.outer(u_a, np.cos(15 * theta + 0.7))
+    blended = mode(562.40, 15, np.outer(psi, np.cos(15 * theta)) + copy)
+    stray = dataclasses.replace(blended, residues=(np.outer(psi, np.cos(15 * theta) + 1j * np.sin(15 * theta + 0.2))
+                                                   + copy).ravel())
+    assert mpc(blended.residues) < 0.5  # the check on the whole pole would merge it
+    assert len(merge_groups([strong, blended], line_hz=0.5, n_channels=2)) == 2
+    assert len(merge_groups([strong, stray], line_hz=0.5, n_channels=2)) == 1

@@ -257,20 +257,25 @@ def _other_channel_shape(a: GroupMode, b: GroupMode, n_channels: int, line_hz: f
     most a line, ``line_hz``: located by its own group's data, as :func:`_both_located`
     asks) — the shape says a pole is no copy, not that it is a mode: a group's stray pole
     beside a crowd has a shape of its own too (measured: three such rows at the held-out
-    seeds + 1000, 0.76–0.88 Hz scatter on 0.5 Hz lines) — and a normal mode (MPC ≥ 1/2,
-    identify's gate: on noise-free data a fit's stray pole at a strong mode's frequency, in
-    a group its copy leaks into, has a shape of its own, complex — the seed test of
-    ``test_lsce`` at 139.59 Hz, MPC 0.14, beside the same n = 7); with one channel every
+    seeds + 1000, 0.76–0.88 Hz scatter on 0.5 Hz lines) — and its part that a's copy
+    cannot hold (its residues with a's channel shape projected out) a normal mode (MPC ≥
+    1/2, identify's gate: on noise-free data a fit's stray pole at a strong mode's
+    frequency, in a group its copy leaks into, has a shape of its own, complex — the seed
+    test of ``test_lsce`` at 139.59 Hz, MPC 0.14, beside the same n = 7; until session 31
+    the whole pole's MPC, which a copy of a beside the mode blends: the coupling + mass's
+    same n = 49 at 562.40 Hz, MPC 0.31, 0.95 without a's channel shape); with one channel every
     MAC is 1 and the rule says nothing. The argument needs ``b`` to be one mode: in a crowd of
     its alias class one pole stands for several, and a pole kept apart by this rule alone is
     then dropped after the classification (session 30,
     :func:`~tiremodal_cli.modal.misreads.crowd_blends`). Measured on the validation matrix:
     docs/lsce.md, "Channel shapes (session 29)" and "Crowd blends (session 30)"."""
-    if (n_channels < 2 or line_hz <= 0 or b.visibility < PEAK_OVER_NOISE or b.frequency_std_hz > line_hz
-            or mpc(b.residues) < 0.5):
+    if n_channels < 2 or line_hz <= 0 or b.visibility < PEAK_OVER_NOISE or b.frequency_std_hz > line_hz:
         return False
     u, v = channel_shape(a, n_channels), channel_shape(b, n_channels)
-    return abs(np.vdot(u, v)) ** 2 < CHANNEL_MAC_MAX
+    if abs(np.vdot(u, v)) ** 2 >= CHANNEL_MAC_MAX:
+        return False
+    R = np.asarray(b.residues).reshape(n_channels, -1)
+    return mpc((R - np.outer(u, u.conj() @ R)).ravel()) >= 0.5  # b's part that a's copy cannot hold
 
 
 def _both_located(a: GroupMode, b: GroupMode, energy_ratio: float, line_hz: float, complete: bool = True) -> bool:
