@@ -403,6 +403,12 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1297 / 1334 (97 %) | 7 | 8 / 1834 (0.4 %) | 0 | 14 / 14 | 0 |
 | seeds + 3000, session 31 (as above) | 79ad8b0 | paper | 1167 / 1182 (99 %) | 3 | **12** / 1646 (0.7 %) | **0** (added mass 2 / 49: its row at 257.69 Hz, a copy of the opposite n = 10, merged) | 13 / 13 | 0 |
 | | | ring | 1305 / 1334 (98 %) | 4 | 14 / 1849 (0.8 %) | 0 | 14 / 14 | 0 |
+| seeds + 1000, session 31 (and the channel rule's normal-mode check on the weaker pole's part that the stronger mode's copy cannot hold) | 4f37560 | paper | 1163 / 1182 (98 %) | 2 | 11 / 1622 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | **1300** / 1334 (97 %) | 4 | 10 / 1848 (0.5 %) | 0 | 14 / 14 | 0 |
+| seeds + 2000, the same: only the seven mass, coupling and membrane cases run (the others as on 79ad8b0) | 4f37560 | paper | 1162 / 1182 (98 %) | 3 | 12 / 1644 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | 1296 / 1334 (97 %) | 7 | 8 / 1833 (0.4 %) | 0 | 14 / 14 | 0 |
+| seeds + 3000, the same (seven cases run) | 4f37560 | paper | **1168** / 1182 (99 %) | 3 | 12 / 1648 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | **1306** / 1334 (98 %) | 4 | 14 / 1850 (0.8 %) | 0 | 14 / 14 | 0 |
 
 Session 31's rows, case by case against session 30's (6d57eb6) at the same seeds on the same
 machine: at + 1000 the ring's noise case loses a spurious row (224.82 Hz), its sidewall coupling
@@ -413,6 +419,11 @@ found; at + 3000 the added mass's 257.69 Hz. At the matrix's seeds (below) the r
 mass its weak same n = 64 (721.12 Hz: a pole 2.1 × its row's residual, scattered 1.8 Hz over
 the model orders, 6.6 Hz from the opposite n = 27 of group 7). For the first time no
 case is over 5 % spurious at any of the four seeds; every diagnosis is right at all four.
+The channel rule's check on the part of the weaker pole that the stronger mode's copy cannot
+hold (4f37560) moves only the sidewall coupling + mass and, at + 3000, the membrane + cavity:
+found + 1 at the matrix's seeds (the same n = 49 at 562.26 Hz), + 1 at + 1000 (n = 21 at
+283.44 Hz), − 1 at + 2000 (that n = 21), + 2 at + 3000 (n = 21; the membrane + cavity's same
+n = 37 at 262.79 Hz); no spurious row added or lost at any seed.
 
 Session 24's quieter runs: the same tests with every sensor's noise (force and responses) 5 ×
 and 50 × lower. Nothing the matrix misses is the noise's: the same weak same-direction modes
@@ -588,8 +599,10 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1306 / 1334 (98 %) | 10 / 1843 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-29, end of session 30 | a pole kept apart by its channel shape alone that the classification finds in a crowd of its alias class is a blend, dropped (modal.misreads; the code of 6d57eb6). Run on an Intel Xeon (AVX-512), where sessions 26–29 ran on an AMD EPYC: session 29's code here gives ring 1307 / 1334, 10 / 1845 (on the EPYC 1306, 10 / 1843), paper as there | paper | 1168 / 1182 (99 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 23 min (a clean-clone CI beside it) |
 | | | ring | 1307 / 1334 (98 %) | 10 / 1845 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
-| 2026-11-29, end of session 31 | a pole of another order group within the stronger mode's half-power half-width, neither on a peak of its own (under 3 × its row's residual) nor pinned by its data (scatter over a line), is the stronger mode's copy (modal.merge; the code of 79ad8b0): held out, no case over 5 % spurious at any seed | paper | 1168 / 1182 (99 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 19 min (`--jobs 1`, another matrix beside it) |
+| 2026-11-29, session 31 | a pole of another order group within the stronger mode's half-power half-width, neither on a peak of its own (under 3 × its row's residual) nor pinned by its data (scatter over a line), is the stronger mode's copy (modal.merge; the code of 79ad8b0): held out, no case over 5 % spurious at any seed | paper | 1168 / 1182 (99 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 19 min (`--jobs 1`, another matrix beside it) |
 | | | ring | 1306 / 1334 (98 %) | 9 / 1842 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-29, end of session 31 | and the channel rule's normal-mode check on the weaker pole's part that the stronger mode's copy cannot hold, its residues with the stronger one's channel shape projected out (the code of 4f37560) | paper | 1168 / 1182 (99 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 27 min (`--jobs 1`, a clean-clone CI beside it) |
+| | | ring | 1307 / 1334 (98 %) | 9 / 1843 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
