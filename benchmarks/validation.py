@@ -35,7 +35,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from tiremodal_cli.modal.merge import SAME_POLE_FLOOR_BW  # noqa: E402
-from tiremodal_cli.workflow.validation import FACTORS, REFERENCE, Case, matrix, run_case  # noqa: E402
+from tiremodal_cli.workflow.validation import FACTORS, REFERENCE, Case, held_out_levels, matrix, run_case  # noqa: E402
 
 
 def _one(case_dict: dict, keep: str | None) -> dict:
@@ -633,10 +633,15 @@ def main(argv=None) -> int:
                     help="multiply every case's sensor noise by this (> 0): whether what the matrix misses is "
                          "the noise's (the ruler's visibility follows the noise; docs/validation.md is not "
                          "rewritten)")
+    ap.add_argument("--held-out-levels", type=int, default=0, metavar="K",
+                    help="instead of the matrix, K seeded random tests per generator at levels no rule was "
+                         "measured on (other sample rates, point counts, hits, noise, record lengths; "
+                         "validation.HELD_OUT_LEVELS; docs/validation.md is not rewritten)")
     args = ap.parse_args(argv)
     if not args.noise_scale > 0:
         ap.error(f"--noise-scale {args.noise_scale:g}: must be > 0")
-    cases = matrix(generators=tuple(args.generator or ("ring", "paper")))
+    gens = tuple(args.generator or ("ring", "paper"))
+    cases = held_out_levels(args.held_out_levels, generators=gens) if args.held_out_levels else matrix(generators=gens)
     if args.seed_offset:
         cases = [dataclasses.replace(c, seed=c.seed + args.seed_offset) for c in cases]
     if args.noise_scale != 1.0:
@@ -667,7 +672,8 @@ def main(argv=None) -> int:
     print(totals(ordered))
     print()
     print(table(ordered))
-    if not args.no_docs and not args.only and not args.generator and not args.seed_offset and args.noise_scale == 1.0:
+    if (not args.no_docs and not args.only and not args.generator and not args.seed_offset and args.noise_scale == 1.0
+            and not args.held_out_levels):
         write_docs(ordered, ROOT / "docs" / "validation.md", elapsed, args.jobs)
         print(f"wrote {ROOT / 'docs' / 'validation.md'}", file=sys.stderr)
     return 0

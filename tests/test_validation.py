@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from tiremodal_cli.tyre.simulate import SimulationConfig, simulate
-from tiremodal_cli.workflow.validation import (FACTORS, PHYSICS, Case, config_for, expected_groups, matrix,
-                                      run_case, score_modes)
+from tiremodal_cli.workflow.validation import (FACTORS, HELD_OUT_LEVELS, PHYSICS, Case, config_for, expected_groups,
+                                      held_out_levels, matrix, run_case, score_modes)
 from tiremodal_cli.workflow.validation_scoring import detectable, diagnosis_right
 
 
@@ -130,6 +130,20 @@ def test_matrix_covers_every_level_of_every_factor():
         assert any("+" in c.physics for c in mine)  # effects in pairs
     assert len({c.seed for c in cases}) == len(cases)
     assert matrix() == cases  # seeded
+
+
+def test_held_out_levels_are_none_of_the_matrix():
+    """The held-out set-ups share no level with the matrix but the form and faults (which
+    have no other), and their record length sets the line spacing."""
+    cases = held_out_levels(6)
+    assert held_out_levels(6) == cases  # seeded
+    for factor in ("sample_rate", "n_points", "n_hits", "noise"):
+        assert not set(HELD_OUT_LEVELS[factor]) & set(FACTORS[factor]), factor
+        assert not {getattr(c, factor) for c in cases} & set(FACTORS[factor]), factor
+    assert not {c.seed for c in cases} & {c.seed + off for c in matrix() for off in (0, 1000, 2000, 3000)}
+    for c in cases[:3]:
+        assert config_for(c).n_samples == round(c.record_s * c.sample_rate)
+    assert {c.record_s for c in cases} <= set(HELD_OUT_LEVELS["record_s"]) and 2.0 not in HELD_OUT_LEVELS["record_s"]
 
 
 def test_faulty_cases_bounce_a_fifth_of_the_hits():

@@ -41,8 +41,8 @@ from tiremodal_cli.workflow.validation_scoring import EXPECTED_DIAGNOSIS, TOLERA
 from tiremodal_cli.workflow.validation_scoring import (detectable, diagnosis_right, expected_groups, read_modes,
                                                        score_modes)
 
-__all__ = ["Case", "FACTORS", "REFERENCE", "PHYSICS", "PAIRS", "EXPECTED_DIAGNOSIS", "matrix", "config_for",
-           "expected_groups", "score_modes", "run_case", "TOLERANCE"]
+__all__ = ["Case", "FACTORS", "HELD_OUT_LEVELS", "REFERENCE", "PHYSICS", "PAIRS", "EXPECTED_DIAGNOSIS", "matrix",
+           "held_out_levels", "config_for", "expected_groups", "score_modes", "run_case", "TOLERANCE"]
 
 #: Levels of every factor (the reference's level first).
 FACTORS = {
@@ -52,6 +52,18 @@ FACTORS = {
     "noise": (0.005, 0.02, 0.05),
     "form": ("accelerance", "receptance", "mobility"),
     "faults": ("none", "bounced+overload"),
+}
+
+#: Levels no rule was ever measured on (none is a level of :data:`FACTORS`; the record
+#: length, fixed at :data:`RECORD_S` in the matrix, varies too: other line spacings).
+HELD_OUT_LEVELS = {
+    "sample_rate": (1600.0, 3200.0, 4096.0),
+    "n_points": (20, 30, 36, 60),
+    "n_hits": (2, 4),
+    "noise": (0.01, 0.03),
+    "form": ("accelerance", "receptance", "mobility"),
+    "faults": ("none", "bounced+overload"),
+    "record_s": (1.0, 4.0),
 }
 
 #: Physical variants of each generator ("none": the paper's model itself / its limit).
@@ -84,6 +96,7 @@ class Case:
     form: str = "accelerance"
     faults: str = "none"
     physics: str = "none"  # a PHYSICS name, or two joined by "+"
+    record_s: float = RECORD_S
     seed: int = 0
     label: str = "reference"
 
@@ -125,6 +138,25 @@ def matrix(*, combinations: int = 4, seed: int = 2026, generators=("ring", "pape
                                 n_hits=int(c.n_hits), noise=float(c.noise)) for c in out]
 
 
+def held_out_levels(count: int, *, seed: int = 5000, generators=("ring", "paper")) -> list[Case]:
+    """``count`` seeded random tests per generator at the levels of :data:`HELD_OUT_LEVELS`,
+    each with one or two physical effects (or none, one case in three): set-ups no rule was
+    measured on, for ``benchmarks/validation.py --held-out-levels``."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for g in generators:
+        for k in range(count):
+            lv = {f: levels[rng.integers(len(levels))] for f, levels in HELD_OUT_LEVELS.items()}
+            phys = list(PHYSICS[g][1:])
+            n_eff = k % 3
+            pick = sorted(rng.choice(len(phys), size=n_eff, replace=False)) if n_eff else []
+            ph = _compatible(g, "+".join(phys[i] for i in pick)) if pick else "none"
+            label = "held-out: " + ", ".join(f"{f}={v}" for f, v in lv.items()) + f", physics={ph}"
+            out.append(Case(generator=g, **(lv | {"physics": ph}), seed=seed + len(out), label=label))
+    return [dataclasses.replace(c, sample_rate=float(c.sample_rate), n_points=int(c.n_points), n_hits=int(c.n_hits),
+                                noise=float(c.noise), record_s=float(c.record_s)) for c in out]
+
+
 def _compatible(generator: str, physics: str) -> str:
     """Two ring variants that set the same parameters (the three tangential ones) cannot
     be combined; keep the first."""
@@ -137,7 +169,7 @@ def _compatible(generator: str, physics: str) -> str:
 def config_for(case: Case) -> SimulationConfig:
     """The simulation of a case: the reference tyre of its generator with its physics, the
     test set-up of its factors, a clamped rim unless the physics is ``rim``."""
-    ns = int(round(RECORD_S * case.sample_rate))
+    ns = int(round(case.record_s * case.sample_rate))
     faults = Faults()
     if case.faults != "none":
         rng = np.random.default_rng(10_000 + case.seed)
