@@ -69,6 +69,21 @@ def test_a_band_another_group_s_pole_reaches_is_not_re_swept():
     assert far_bands([(14.0, 35.0)], [_pole(35.5, 0.02)], 0.5) == []
 
 
+def test_on_an_orthogonal_grid_only_a_crowd_of_other_groups_excuses_a_band():
+    """Where the order groups are orthogonal a mode shows in no other group: a band beside
+    one other group's pole (the n = 0 at 51.97 Hz, ζ 0.02, beside group 1's band about the
+    n = 1 at 51.46 Hz) is swept again; a band that poles of two other groups reach (the
+    crowd under the sidewall resonance) is not; a band the group's own pole reaches is not;
+    with one group enough (a grid whose symmetry is broken: leaks) the band is not."""
+    band = [(50.25, 53.0)]
+    assert far_bands(band, [_pole(51.97, 0.02)], 0.25, [0], 2, own=1) == band
+    assert far_bands(band, [_pole(51.97, 0.02), _pole(52.2, 0.02)], 0.25, [0, 3], 2, own=1) == []
+    assert far_bands(band, [_pole(51.97, 0.02), _pole(52.2, 0.02)], 0.25, [0, 0], 2, own=1) == band
+    assert far_bands(band, [_pole(51.97, 0.02)], 0.25, [1], 2, own=1) == []
+    assert far_bands(band, [_pole(51.97, 0.02)], 0.25, [0], 1, own=1) == []
+    assert far_bands(band, [_pole(60.0, 0.02)], 0.25, [0], 1, own=1) == band
+
+
 @pytest.mark.parametrize("rows", [2, 6])
 def test_noise_alone_gives_an_unexplained_band_rarely(rows):
     """Noise alone, its level drifting tenfold over the band: over 200 seeded draws, the

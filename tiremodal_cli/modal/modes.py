@@ -186,9 +186,10 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
         out[g] = (data, group_modes(data, spatial, group_max))
         if progress:
             progress(i + 1, len(groups))
-    every = [m.pole for _, r in out.values() for m in r[1]]
+    every = [(m.pole, h) for h, (_, r) in out.items() for m in r[1]]
     for g, (data, r) in out.items():  # peaks no pole of any group stands for (modal.rescue)
-        far = far_bands(r[5], every, band.freq[1] - band.freq[0]) if not gaps else []
+        far = far_bands(r[5], [p for p, _ in every], band.freq[1] - band.freq[0], [h for _, h in every],
+                        2 if orthogonal else 1, own=g) if not gaps else []
         out[g] = (data, group_modes(data, spatial, group_max, far)) if far else out[g]
     mixing = (order_mixing(band.freq, {g: d.rows for g, (d, _) in out.items()},
                            [(m.group, m.pole, m.significance) for _, r in out.values() for m in r[1]], channel_angle)
