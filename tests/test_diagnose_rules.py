@@ -33,6 +33,21 @@ def test_a_spare_parameter_beside_an_effect_is_compensation():
     assert "a residual remains" in d.verdict
 
 
+def test_a_search_stopped_at_its_limit_says_so():
+    """Table A1 with ``max_effects`` = 1: the membrane is adopted, a residual above the noise
+    remains, and the verdict says the search stopped at its limit — not that no candidate
+    explains it (with the default limit, 2, it does say that: the second round ran)."""
+    with TABLE_A1.open() as fh:
+        rows = list(csv.DictReader(fh))
+    d = diagnose(rows, TyreParameters(), DiagnoseOptions(max_effects=1))
+    assert d.adopted == ("sidewall_membrane",) and d.residual_after["exceeds_noise"]
+    assert "stopped at max_effects = 1" in d.verdict and "no candidate explains" not in d.verdict
+    d0 = diagnose(rows, TyreParameters(), DiagnoseOptions(max_effects=0))
+    assert not d0.adopted and "stopped at max_effects = 0" in d0.verdict
+    d2 = diagnose(rows, TyreParameters())
+    assert "no candidate explains" in d2.verdict and "stopped at" not in d2.verdict
+
+
 def test_a_second_effect_with_a_mode_of_its_own_is_adopted():
     """The paper's model with a membrane and an extensible belt (EA/R² on n = 0): the
     membrane is adopted first; the belt, second, brings back the breathing modes the first

@@ -176,7 +176,8 @@ def diagnose(rows, base_params: TyreParameters = TyreParameters(), opt: Diagnose
     ticks.finish()
     explained = {round(c["frequency_hz"], 6) for c in s.cavity_modes}
     unexplained = tuple(u for u in measured.unexplained if round(u["frequency_hz"], 6) not in explained)
-    verdict = "; ".join(t for t in (verdict_text(s.adopted, s.tried, s.residual_before, s.residual_now, unexplained),
+    verdict = "; ".join(t for t in (verdict_text(s.adopted, s.tried, s.residual_before, s.residual_now, unexplained,
+                                                 opt.max_effects),
                                     profile_text(profile)) if t)
     return Diagnosis(base=base.fit, augmented=s.current.fit, adopted=tuple(s.adopted), candidates=tuple(s.tried),
                      residual_before=s.residual_before, residual_after=s.residual_now, unexplained=unexplained,

@@ -101,7 +101,14 @@ def profile_text(profile: dict | None) -> str:
             + (f" ({', '.join(profile['moves'])} moving with it)" if profile["moves"] else "") + line)
 
 
-def verdict_text(adopted, tried, before, after, unexplained) -> str:
+def verdict_text(adopted, tried, before, after, unexplained, max_effects: int | None = None) -> str:
+    """The diagnosis in one sentence. A residual above the noise is said to be one no
+    candidate explains only when the search could go on; with ``max_effects`` effects
+    adopted it stopped at that limit, and the verdict says so (a candidate might explain
+    the rest: a test with two effects and a breathing mode the model lacks)."""
+    capped = max_effects is not None and len(adopted) >= max_effects
+    remains = (f"a residual remains: the search stopped at max_effects = {max_effects} (raise it to try more)"
+               if capped else "a residual remains that no candidate explains")
     if not before["exceeds_noise"] and not adopted:
         v = ("no effect needed: the base model's residual is at the level of the noise "
              f"(RMS {before['rms_error_pct']:.3f} %, χ² p = {before['p_value']:.2g})")
@@ -110,12 +117,11 @@ def verdict_text(adopted, tried, before, after, unexplained) -> str:
         v = (f"adopted {what}: RMS error {before['rms_error_pct']:.3f} % → {after['rms_error_pct']:.3f} %, "
              f"max {before['max_error_pct']:.3f} % → {after['max_error_pct']:.3f} %")
         if after["exceeds_noise"]:
-            v += ("; a residual remains that no candidate explains ("
+            v += (f"; {remains} ("
                   + "; ".join([f for f in after["pattern"]["findings"] if not f.startswith("the residual exceeds")]
                               or ["no clear pattern"]) + ")")
     else:
-        v = ("a residual remains that no candidate explains: "
-             + "; ".join(before["pattern"]["findings"]))
+        v = f"{remains}: " + "; ".join(before["pattern"]["findings"])
     tail = f"{len(unexplained)} measured mode(s) fit no structural (n, branch)"
     if unexplained and tail not in v:  # the pattern's findings may say it already
         v += f"; {tail}"
