@@ -354,6 +354,29 @@ def test_default_band_follows_the_data_not_the_sample_rate(fs):
     assert hi > 300.0  # the band is not cut short below the opposite n ≈ 12 modes
 
 
+def test_default_band_runs_where_one_channel_measures_coherently():
+    """Three channels on 40 points, 3 averages (threshold 0.90): the tread coherent (0.98)
+    from 5.5 Hz up to 1,100 Hz, the sidewall up to 700 Hz, a rim channel never (Beta(1, 2)
+    noise coherence, seeded). The band runs to 1,100 Hz (the median over all 120 FRFs would
+    end it at 700 Hz); with no channel coherent above 700 Hz it ends there; a dead (NaN)
+    channel is left out. The foot stays where most FRFs are coherent: the rim channel's
+    stiffness line coherent from 1 Hz does not lower it."""
+    from tiremodal_cli.modal.band import default_band
+    rng = np.random.default_rng(4)
+    f = np.arange(0.0, 1600.0, 0.5)
+    noise = lambda: 1 - np.sqrt(rng.uniform(size=(40, f.size)))  # noqa: E731  Beta(1, 2)
+    tread, side, rim = noise(), noise(), noise()
+    tread[:, (f > 5) & (f <= 1100)] = 0.98
+    side[:, (f > 5) & (f <= 700)] = 0.98
+    (lo, hi), why = default_band(f, np.stack([tread, side, rim]), np.full(40, 3))
+    assert lo == 5.5 and hi == 1100.0 and "one channel" in why
+    (lo, hi), _ = default_band(f, np.stack([side, rim, np.full_like(rim, np.nan)]), np.full(40, 3))
+    assert hi == 700.0
+    rim[:, (f >= 1) & (f <= 5)] = 0.99
+    (lo, hi), _ = default_band(f, np.stack([tread, side, rim]), np.full(40, 3))
+    assert lo == 5.5 and hi == 1100.0
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_single_reference_modes_1p5_bandwidths_apart_both_found(seed):
     """One FRF (one reference, one response: every MAC is 1), 0.5 % noise, four modes of
