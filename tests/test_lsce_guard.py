@@ -63,30 +63,23 @@ def test_guarded_band_keeps_its_lines_and_widens_its_period():
 @pytest.fixture(scope="module")
 def ring_rim_5120(tmp_path_factory):
     """The validation matrix's 5,120 Hz ring with a free rim, 40 points, bounced and
-    overloaded hits (seeded), through ``run``; then its modal stage again on the run's FRFs
-    over the run's band, without the guard (``ModalOptions(guard=False)``) and as by default.
-    Returns the generator's truth modes and the frequencies (Hz) of the two tables: without, default."""
-    import json
+    overloaded hits (seeded), its FRFs as ``run`` computes them; its modal stage over
+    ``run``'s default band, without the guard (``ModalOptions(guard=False)``) and as by
+    default. Returns the generator's truth modes and the frequencies (Hz) of the two
+    tables: without, default."""
+    from conftest import matrix_case_frfs
 
-    import h5py
-
-    from tiremodal_cli.io.frffile import read_frf
+    from tiremodal_cli.modal.band import default_band
     from tiremodal_cli.modal.modes import modal_table_from_frf
     from tiremodal_cli.modal.options import ModalOptions
-    from tiremodal_cli.tyre.simulate import simulate
-    from tiremodal_cli.workflow.validation import config_for, matrix, run_case
-    case = next(c for c in matrix()
-                if c.name == "ring:combo: sample_rate=5120.0, n_points=40, faults=bounced+overload, physics=rim")
-    folder = tmp_path_factory.mktemp("ring_rim_5120")
-    assert run_case(case, folder)["status"] == "ok"
-    with h5py.File(folder / "run" / "modal.h5") as f:
-        band = tuple(json.loads(f.attrs["meta"])["band_hz"])
-    r = read_frf(folder / "run" / "frf.h5")
+    sim, r = matrix_case_frfs("ring:combo: sample_rate=5120.0, n_points=40, faults=bounced+overload, physics=rim",
+                              tmp_path_factory.mktemp("ring_rim_5120"))
+    band, _ = default_band(r.freq_hz, r.coherence, r.n_averages, np.mean(r.force_autospectrum, axis=0))
     assert ModalOptions().guard  # the default path
     tables = [modal_table_from_frf(r, ModalOptions(band_hz=band, guard=False))[0],
               modal_table_from_frf(r, ModalOptions(band_hz=band))[0]]
     freqs = [np.asarray(t.frequency_hz, float) for t in tables]
-    return simulate(config_for(case)).truth["modes"], freqs
+    return sim.truth["modes"], freqs
 
 
 def test_the_rim_mode_at_the_foot_is_found_within_the_ruler_by_default(ring_rim_5120):

@@ -100,25 +100,16 @@ def test_noise_alone_gives_an_unexplained_band_rarely(rows):
 @pytest.fixture(scope="module")
 def ring_5120_rim(tmp_path_factory):
     """The validation matrix's 5,120 Hz ring combination (24 points, one hit, 2 % noise,
-    mobility, Timoshenko belt and a free rim; seeded) through ``run``, and its modal stage
-    again on the run's FRFs without the rescue. Returns the generator's lower n = 1 rim
-    mode (Hz) and the frequencies (Hz) of the two tables: default, without."""
+    mobility, Timoshenko belt and a free rim; seeded), its FRFs as ``run`` computes them,
+    and its modal stage by default and without the rescue. Returns the generator's lower
+    n = 1 rim mode (Hz) and the frequencies (Hz) of the two tables: default, without."""
     from unittest import mock
 
-    from tiremodal_cli.io.frffile import read_frf
-    from tiremodal_cli.io.measurement import write_measurement
+    from conftest import matrix_case_frfs
+
     from tiremodal_cli.modal import groupmodes, modes
-    from tiremodal_cli.tyre.simulate import simulate
-    from tiremodal_cli.workflow.pipeline import run as run_pipeline
-    from tiremodal_cli.workflow.run_options import RunOptions
-    from tiremodal_cli.workflow.validation import config_for, matrix
-    case = next(c for c in matrix() if c.name == "ring:combo: sample_rate=5120.0, n_points=24, n_hits=1, "
-                                                 "noise=0.02, form=mobility, physics=timoshenko+rim")
-    sim = simulate(config_for(case))
-    folder = tmp_path_factory.mktemp("ring_5120_rim")
-    write_measurement(folder / "test.h5", sim.measurement, overwrite=True)
-    run_pipeline(folder / "test.h5", folder / "run", RunOptions(form=case.form))
-    r = read_frf(folder / "run" / "frf.h5")
+    sim, r = matrix_case_frfs("ring:combo: sample_rate=5120.0, n_points=24, n_hits=1, noise=0.02, form=mobility, "
+                              "physics=timoshenko+rim", tmp_path_factory.mktemp("ring_5120_rim"))
     default = modes.modal_table_from_frf(r)[0]
     with mock.patch.object(groupmodes, "unexplained_bands", lambda *a, **k: []):
         without = modes.modal_table_from_frf(r)[0]
