@@ -554,6 +554,11 @@ rescue's one-group excuse dropped on orthogonal grids), `--jobs 1` and `--jobs 2
 | held-out levels | a678815 | paper | **671** / 685 (98 %) | 2 | 20 / 877 (2.3 %) | 0 (most: 3 / 64) | **12** / 12 |
 | | | ring | 682 / 704 (97 %) | 5 | 8 / 876 (0.9 %) | 0 | 10 / 12 |
 
+The matrix at its own seeds is unchanged case by case by the two changes; at seeds + 1000
+(a678815 against 4f37560) the paper is unchanged and the ring finds 1300 → 1302 (the 5,120 Hz
+rim combination's n = 41 and 42 opposite at 1,211 and 1,252 Hz, above the old band's top),
+spurious 10 → 11 of 1,853 (one row of that case at 1,194.54 Hz, between truth modes).
+
 What the first run found, by cause:
 
 * **The band's top in receptance** (four paper tests, 45 modes): the median coherence over
