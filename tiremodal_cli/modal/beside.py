@@ -52,8 +52,8 @@ from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.modal.groupfit import NOISE_ALPHA, PIN_SIGMAS
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import lsfd_participation
-from tiremodal_cli.modal.refine import (MAX_DAMPING_FACTOR, WINDOW_HALF_WIDTHS, forward_jacobian, participation_basis,
-                                        stack_references)
+from tiremodal_cli.modal.refine import MAX_DAMPING_FACTOR, WINDOW_HALF_WIDTHS
+from tiremodal_cli.modal.varpro import forward_jacobian, participation_basis, stack_references
 from tiremodal_cli.modal.stabilization import Cluster, StablePole
 
 __all__ = ["MAX_MAC", "MAX_NEW", "SEARCH_HALF_WIDTHS", "beside_poles", "proposals", "with_beside"]

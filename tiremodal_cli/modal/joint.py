@@ -49,7 +49,8 @@ from tiremodal_cli.modal.groupfit import NOISE_ALPHA
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import pole_basis, significance, synthesize
 from tiremodal_cli.modal.merge import MergedMode
-from tiremodal_cli.modal.refine import MAX_DAMPING_FACTOR, WINDOW_HALF_WIDTHS, forward_jacobian, moved_poles
+from tiremodal_cli.modal.refine import MAX_DAMPING_FACTOR, WINDOW_HALF_WIDTHS
+from tiremodal_cli.modal.varpro import forward_jacobian, moved_poles
 from tiremodal_cli.modal.spatial import grid_design, grid_points
 
 __all__ = ["Proposal", "propose", "threshold", "add_missing_orders"]
