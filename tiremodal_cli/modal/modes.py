@@ -157,11 +157,14 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
         modes, synth, proposed = add_missing_orders(band.freq, band.Hb, point_angle, locs, modes, synth)
         modes, weak = weak_in_frfs(modes, opt.min_significance, band.freq, point_angle, band.flat - synth)
         rejected += proposed + weak
+    if opt.refine:  # the poles near the band's edges (docs/lsce.md, "Pole refinement"); the physical
+        # check where a group's rows are not its orders' whole data (docs/lsce.md, "Session 33")
+        modes, unlocated = refine_adopted(modes, {g: k for g, k in kept.items() if k is not None},
+                                          None if ortho and not gaps else synth)
+        rejected += unlocated
     modes, edge = off_edges(modes, band.freq[0], band.freq[-1], exp_tau_s)
     if not modes:
         raise no_stable_mode(band.freq, group_max)
-    if opt.refine:  # the poles near the band's edges (docs/lsce.md, "Pole refinement")
-        modes = refine_adopted(modes, {g: k for g, k in kept.items() if k is not None}, synth)
     meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
             "max_order": int(group_max), "exp_tau_s": exp_tau_s, "antisymmetric_share": share,
             "order_mixing": mixing}
