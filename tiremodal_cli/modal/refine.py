@@ -326,7 +326,7 @@ def refine_adopted(modes: list, kept: dict, synthesis=None) -> tuple[list, list]
         if mine:
             s_new, weak, unlocated = _refine_group(modes, mine, data, s, L, synth_g, s_rej, L_rej)
             drop |= {i for i, k in mine.items() if unlocated[k]}
-            moves += [(i, s_new[k], weak[k], data) for i, k in mine.items() if s_new[k] != s[k]]
+            moves += [(i, s_new[k], weak[k], data) for i, k in mine.items() if s_new[k] != s[k] and not unlocated[k]]
     live = np.array([i not in drop for i in range(len(out))], dtype=bool)
     for i, new, weak, data in moves:
         if synthesis is not None:
