@@ -116,12 +116,13 @@ def overlapping_sets(fn, hw) -> list:
     return sets
 
 
-def _set_residual(jw, Y, s_use, L_use, m, q, top, beyond):
+def _set_residual(jw, Y, s_use, L_use, m, q, top, hw):
     """The weighted residual of a set's window as a function of θ — its ``m`` poles' moves
-    (:func:`moved_poles`), then with ``beyond`` the pole beyond the band's top ``top``
-    (rad/s; its frequency above the top and ln damping, in the set's mean half-width σ̄:
-    one pole per reference, any participation) — and of which of the set's poles ``keep``."""
-    n_ref, hw = L_use.shape[1], -s_use[:m].real.mean()
+    (:func:`moved_poles`), then, with a half-width ``hw`` (rad/s; None: none), the pole
+    beyond the band's top ``top`` (rad/s; its frequency above the top in ``hw`` and its ln
+    damping about ``hw``: one pole per reference, any participation) — and of which of the
+    set's poles ``keep``."""
+    n_ref, beyond = L_use.shape[1], hw is not None
 
     def fun(theta, keep=None):
         p, LL = moved_poles(theta[:2 * m], s_use, np.arange(m)), L_use
@@ -172,8 +173,9 @@ def _refine_set(freq, rows, weight, s, s_orig, L, idx, q):
     s_use[:idx.size] = s_orig[idx]
     m, hw0, top = idx.size, -s_orig[idx].real, 2 * np.pi * freq[-1]
     beyond = 2 * np.pi * hi + hw0.max() >= top  # the window within a half-width of the band's top
+    # the mode beyond the top damped as the group's modes are (their median ζ)
     fun = _set_residual(2j * np.pi * freq[w], np.concatenate([Yc.real, Yc.imag], axis=0), s_use, L[use], m, q,
-                        top, beyond)
+                        top, float(np.median(zeta)) * top if beyond else None)
     x0 = np.concatenate([(s[idx].imag - s_orig[idx].imag) / hw0, np.log(s[idx].real / s_orig[idx].real)])
     bound = np.concatenate([np.full(m, MAX_SHIFT_HALF_WIDTHS), np.full(m, np.log(MAX_DAMPING_FACTOR))])
     lower, upper = -bound, bound
