@@ -88,8 +88,9 @@ MAX_DAMPING_FACTOR = 2.0
 #: and the refinement moved right modes off (docs/lsce.md, "Pole refinement")
 EDGE_HALF_WIDTHS = 6.0
 #: a window that reaches within a half-width of the band's top is fitted with one more
-#: pole beyond the top (free from the top to this many of the set's half-widths above it,
-#: its damping within :data:`MAX_DAMPING_FACTOR` of the set's): a mode just above the band,
+#: pole beyond the top (free from the top to this many half-widths above it, its damping
+#: within :data:`MAX_DAMPING_FACTOR` of its group's modes' median ζ, the half-width's
+#: measure; first the set's, which let a broad stray's be as broad): a mode just above the band,
 #: whose flank the two residual terms cannot hold (one farther is smooth in the window and
 #: theirs). Session 33: the 2,560 Hz paper test's opposite n = 32 at 878.87 Hz, its group's
 #: next alias n = 36 at 1,020 Hz above the 1,000 Hz top, refined to 882.02 Hz without it
