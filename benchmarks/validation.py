@@ -594,6 +594,23 @@ What the first run found, by cause:
   band's highest mode where the band ends at fs / 2.56 (n = 41 opposite at 1,211 Hz at
   3,200 Hz, estimated 0.4–1.9 % high from one flank: three spurious rows with it).
 
+**Session 33: the band's top** (30cb58c; docs/lsce.md, "Session 33: the band's top"). The
+edge refinement runs before the edge check, fits a pole beyond the band's top where its
+window reaches it, drops the edge poles the FRFs do not locate, holds copies, and on complete
+symmetric grids judges a move by the group's rows alone:
+
+| run | code | generator | found / expected | mislabelled | spurious / adopted | cases over 5 % | diagnoses right |
+|---|---|---|---|---|---|---|---|
+| held-out levels | 30cb58c | paper | **672** / 685 (98 %) | 2 | **18** / 875 (2.1 %) | 0 (most: 4 / 88) | 12 / 12 |
+| | | ring | 682 / 704 (97 %) | 5 | **7** / 875 (0.8 %) | 0 | 10 / 12 |
+
+The 20-point 3,200 Hz tests find n = 41 in two of three and lose their three rows by the
+top; the 36-point 3,200 Hz test with 1 s records loses its n = 41 (refined in its group from
+1,209.78 to 1,217.27 Hz, its half-power band then across the top) and the 60-point 4,096 Hz
+receptance test gains a row at 1,304.43 Hz. The matrix: paper 1168 → 1170 found, mislabelled
+1 → 0, spurious 9 → 7; ring spurious 9 → 6; at seeds + 1000 (e8cd2b2, before the pole beyond
+was damped as its group's modes) paper 1163 found, spurious 11 → 12, ring 1302, 11.
+
 """
 
 
@@ -666,6 +683,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1307 / 1334 (98 %) | 9 / 1843 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-11-29, end of session 32 | the band's top where one channel's median coherence over its points passes; on an orthogonal grid only a crowd of other groups' poles excuses an unexplained band from the rescue (the code of a678815): the matrix unchanged case by case; the held-out levels (above) paper 625 → 671 / 685 found | paper | 1168 / 1182 (99 %) | 9 / 1655 (0.5 %) | 0 | 14 / 14 | 13 / 13 | 11 min (`--jobs 2`, other work beside it) |
 | | | ring | 1307 / 1334 (98 %) | 9 / 1843 (0.5 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-11-29, end of session 33 | the band's top: the edge refinement before the edge check, a pole beyond the top, edge poles the FRFs do not locate dropped, copies held, a move judged by the group's rows on complete symmetric grids (modal.refine; the code of 30cb58c) | paper | 1170 / 1182 (99 %) | 7 / 1654 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 27 min (`--jobs 2`, the held-out levels and a clean-clone CI beside it) |
+| | | ring | 1307 / 1334 (98 %) | 6 / 1840 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
