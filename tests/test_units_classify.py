@@ -229,6 +229,27 @@ def test_an_unreadable_mode_out_of_order_is_read_on_the_other_branch():
     assert [c.n for c in res[:7]] == [1, 2, 3, 4, 5, 6, 8] and [c.n for c in res[8:]] == [0, 1, 2, 3, 4]
 
 
+@pytest.mark.parametrize("sig, reread", [(0.01, True), (0.5, False)])
+def test_a_weak_mode_out_of_order_is_read_on_the_other_branch_whatever_its_branch_confidence(sig, reread):
+    """The set-up above, but the 100 Hz mode's sidewall reads clearly "opposite" (ratio
+    −0.5, confidence 1). Explaining 1 % of the response in its band (under the misread
+    level, 15 %), its reading is no evidence: it is read on the same branch as n = 7. At
+    50 % its branch stands, and it stays out of the opposite branch's order (a misread)."""
+    th = _grid(12)
+    modes = [(n, 0.5) for n in range(1, 7)] + [(8, 0.5), (7, -0.5)] + [(n, -0.5) for n in range(5)]
+    f = [40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 110.0, 100.0, 180.0, 190.0, 200.0, 210.0, 220.0]
+    significance = np.full(len(f), 0.5)
+    significance[7] = sig
+    res = classify(f, _shapes(th, modes), th, LOCS, significance=significance)
+    odd = res[7]
+    assert odd.branch_confidence > 0.99 and odd.n_spatial == 5
+    if reread:
+        assert (odd.n, odd.branch, odd.aliased, odd.in_order) == (7, "same", True, True)
+    else:
+        assert (odd.branch, odd.in_order) == ("opposite", False)
+    assert [c.n for c in res[:7]] == [1, 2, 3, 4, 5, 6, 8] and [c.n for c in res[8:]] == [0, 1, 2, 3, 4]
+
+
 def test_a_clear_mode_off_the_branch_keeps_its_order_when_its_alias_would_make_the_branch_fall():
     """12 points; the in-phase branch n = 1 … 6 at 40 … 110 Hz, and one more clear order-4
     pattern at 92 Hz, 8 % above the branch's n = 4 (a family the branch does not hold: the

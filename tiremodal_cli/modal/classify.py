@@ -48,6 +48,7 @@ import numpy as np
 from tiremodal_cli.conventions import OPPOSITE, SAME
 from tiremodal_cli.modal.alias_walk import BranchModes, Reading, resolve_aliases
 from tiremodal_cli.modal.crowds import crowds
+from tiremodal_cli.modal.misreads import MISREAD_MAX_SIGNIFICANCE
 from tiremodal_cli.modal.spatial import grid_design, grid_points, max_order
 
 __all__ = ["Classification", "classify"]
@@ -132,7 +133,7 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
                                  damping=None if damping_ratio is None else np.asarray(damping_ratio, float)))
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
     reads = _partners_branches(freq_hz, reads, ns)
-    reads = _other_branch(freq_hz, reads, ns, in_order, n_p)
+    reads = _other_branch(freq_hz, reads, ns, in_order, n_p, significance)
     pairs = _split_pairs(freq_hz, reads, ns, in_order)
     on_branch = [o.sure and (in_order[r] or ns[r] == o.n_spatial) for r, o in enumerate(reads)]
     crowd = crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads],
@@ -220,19 +221,31 @@ def _partners_branches(freq_hz, reads: list[Reading], ns: list[int]) -> list[Rea
     return reads
 
 
-def _other_branch(freq_hz, reads: list[Reading], ns: list[int], in_order, n_points: int) -> list[Reading]:
-    """A mode whose branch cannot be read (confidence < 0.5) and that is out of the order of
-    the branch it was read on is read on the other branch, when exactly one order of its
-    alias class (k N ± n_s, k ≤ 2) fits that branch's dispersion: no clear mode of the branch
-    holds that order, every clear mode of a lower order lies below it, every one of a higher
-    order above. ``ns`` and ``in_order`` are updated in place; the order is flagged aliased
-    when it is not the spatial one. (The sample's 260.3 Hz mode: read n = 16 "opposite" at
-    branch confidence 0.22, out of order; on the same branch only n = 18 fits, between n = 17
-    at 251.2 Hz and n = 19 at 269.6 Hz — the generator's n = 18 same at 260.4 Hz.)"""
+def _other_branch(freq_hz, reads: list[Reading], ns: list[int], in_order, n_points: int,
+                  significance=None) -> list[Reading]:
+    """A mode whose branch cannot be read and that is out of the order of the branch it was
+    read on is read on the other branch, when exactly one order of its alias class
+    (k N ± n_s, k ≤ 2) fits that branch's dispersion: no clear mode of the branch holds that
+    order, every clear mode of a lower order lies below it, every one of a higher order
+    above. ``ns`` and ``in_order`` are updated in place; the order is flagged aliased when it
+    is not the spatial one. (The sample's 260.3 Hz mode: read n = 16 "opposite" at branch
+    confidence 0.22, out of order; on the same branch only n = 18 fits, between n = 17 at
+    251.2 Hz and n = 19 at 269.6 Hz — the generator's n = 18 same at 260.4 Hz.)
+
+    A branch cannot be read at a confidence under 0.5, nor (session 34) on a mode that
+    explains under :data:`~tiremodal_cli.modal.misreads.MISREAD_MAX_SIGNIFICANCE` of the
+    physical response in its half-power band (``significance``, (n_modes,)): its tread–sidewall
+    product is then mostly its neighbours' misfit (the paper's membrane: the same-direction
+    n = 55 at 344.7 Hz, 0.4 % of its band's response on the flank of the opposite n = 13 of
+    its order group, reads "opposite" at confidence 0.60). Such a mode out of order was
+    dropped as a misread (:mod:`~tiremodal_cli.modal.misreads`) whatever the other branch
+    held. Measured: docs/lsce.md, "Session 34"."""
     reads = list(reads)
+    weak = np.zeros(len(reads), dtype=bool) if significance is None else \
+        np.asarray(significance, dtype=float) < MISREAD_MAX_SIGNIFICANCE
     for r in range(len(reads)):
         o = reads[r]
-        if o.branch_confidence >= 0.5 or in_order[r] or o.branch not in (SAME, OPPOSITE):
+        if (o.branch_confidence >= 0.5 and not weak[r]) or in_order[r] or o.branch not in (SAME, OPPOSITE):
             continue
         other = OPPOSITE if o.branch == SAME else SAME
         clear = [q for q in range(len(reads)) if q != r and reads[q].branch == other and reads[q].sure]
