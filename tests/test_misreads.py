@@ -81,6 +81,25 @@ def test_a_weak_mode_out_of_order_narrower_than_its_neighbours_is_no_blend_and_s
     assert out.freq_hz.size == 5 and not out.rejected and not classes[3].in_order
 
 
+@pytest.mark.parametrize("symmetric, zeta_b, dropped", [(True, 0.035, True), (False, 0.035, False),
+                                                         (True, 0.01, False)])
+def test_a_split_pair_on_a_symmetric_structure_loses_its_weaker_broader_member(symmetric, zeta_b, dropped):
+    """n = 2 … 5 rising at ζ 2 %, and a second n = 3 reading 3 Hz above the first, weak
+    (5 % of the response). On a structure symmetric about its sensors cos and sin modes of
+    one order share one frequency: broader than its partner (ζ 3.5 %) it is a blend,
+    dropped, and the n = 3 at 160 Hz is no pair member. With the symmetry broken (a mass)
+    the two are a split pair; narrower than its partner (ζ 1 %) it is a mode of its own."""
+    res, th = _result([150.0, 160.0, 163.0, 170.0, 180.0], [2, 3, 3, 4, 5], [0.6, 0.6, 0.05, 0.6, 0.6],
+                      zeta=[0.02, 0.02, zeta_b, 0.02, 0.02])
+    out, classes = without_misreads(res, _classifier(th), symmetric=symmetric)
+    if dropped:
+        assert out.freq_hz.tolist() == [150.0, 160.0, 170.0, 180.0] and all(c.pair is None for c in classes)
+        assert len(out.rejected) == 1 and "no split-pair member" in out.rejected[0]["reason"]
+    else:
+        assert out.freq_hz.size == 5 and not out.rejected
+        assert classes[1].pair is not None and classes[1].pair == classes[2].pair
+
+
 def test_the_added_masss_blends_are_not_adopted(tmp_path):
     """The paper's point mass (0.5 kg): its order groups' blends at 170–183 Hz (6 of 50
     adopted until session 14, none within 0.3 % of a truth mode) are gone, dropped as

@@ -334,9 +334,11 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
         live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels]
         locs = [r.channel_location[i] for i in live]
         if "tread" in locs:
+            share, mixed = res.meta.get("antisymmetric_share"), bool((res.meta.get("order_mixing") or {}).get("mixed"))
             res, classes = without_misreads(res, lambda m: classify(
                 m.freq_hz, m.shapes[:, live], r.point_angle, locs, m.significance, m.damping_ratio,
-                m.meta.get("significance_in_group"), m.group, mixed=bool((m.meta["order_mixing"] or {}).get("mixed"))))
+                m.meta.get("significance_in_group"), m.group, mixed=mixed),
+                symmetric=share is not None and share < COPY_MAX_AMPLITUDE and not mixed)
             res.meta["crowds"] = [{"frequency_hz": float(res.freq_hz[i]), "n_spatial": c.n_spatial,
                                    "n_candidates": list(c.n_candidates),
                                    "reason": "orders aliasing onto one spatial order lie within one half-power "
