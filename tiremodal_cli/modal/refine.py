@@ -34,10 +34,12 @@ started: the refinement measured in session 10 had moved almost nothing).
 
 Which poles (:func:`refine_adopted`): those within :data:`EDGE_HALF_WIDTHS` half-power
 half-widths of a band edge, where LSCE's band-limited model errs, and (session 12) the weak
-ones — under ``min_significance`` of the response, kept by the own-peak rule — of a group
-whose fit dropped other stable poles, refined with those poles held in the basis
-(:func:`dropped_poles`: a weak pole's bias is what its group's fit leaves out, above all
-its group's other aliases of its branch, dropped as weak themselves); where a group's rows
+ones — under ``min_significance`` of the response, kept by the own-peak rule — refined with
+the poles their group's fit dropped held in the basis (:func:`dropped_poles`: a weak pole's
+bias is what its group's fit leaves out, above all its group's other aliases of its branch,
+dropped as weak themselves); since session 35 in every group, not only one whose fit dropped
+a pole (a weak pole on a strong one's flank carries LSCE's own bias too: the paper's
+sidewall n = 45 at 298.91 Hz, +0.32 %, in a group that dropped nothing); where a group's rows
 are not the whole data of its orders (an added mass mixes them, points are missing) a moved
 pole is kept only where it also fits the physical FRFs better (every adopted pole near it in
 the basis, and for a weak pole every group's dropped poles, a free residue per FRF). Since
@@ -275,8 +277,8 @@ def dropped_poles(s0, P, kept, freq) -> tuple:
 
 def _refine_group(modes, mine, data, s, L, synth_g, s_rej, L_rej):
     """One group's poles refined: those near a band edge as :func:`refine_poles` does, then
-    the weak ones (share under ``min_significance``) with the group's dropped poles held in
-    the basis. Returns ((m,) refined poles, (m,) bool: moved as a weak pole, (m,) bool: an
+    the weak ones (share under ``min_significance``) with the group's dropped poles (if any)
+    held in the basis. Returns ((m,) refined poles, (m,) bool: moved as a weak pole, (m,) bool: an
     edge pole the FRFs do not locate (:func:`refine_adopted`))."""
     free = np.zeros(s.size, dtype=bool)
     for i, k in mine.items():  # no normal mode (identify's gate, MPC ≥ 1/2): a copy, held where LSCE put it
@@ -286,7 +288,7 @@ def _refine_group(modes, mine, data, s, L, synth_g, s_rej, L_rej):
     weak = np.zeros(s.size, dtype=bool)
     for i, k in mine.items():
         weak[k] = max(modes[i].significance, modes[i].significance_in_group) < data.opt.min_significance
-    weak &= free & ~edge & (s_rej.size > 0)
+    weak &= free & ~edge
     s_new, unlocated = _refine(data.freq, data.rows, synth_g, s, L, data.form, edge)
     if weak.any():
         L_all = None if L is None else np.vstack([L, L_rej])
@@ -307,13 +309,17 @@ def refine_adopted(modes: list, kept: dict, synthesis=None) -> tuple[list, list]
     dropped poles in the basis too).
 
     Refined: the poles within :data:`EDGE_HALF_WIDTHS` of a band edge, and the weak ones
-    (share of the response under ``min_significance``: kept by the own-peak rule) of a
-    group that dropped other poles. A weak pole is biased by what its group's fit leaves
-    out — above all its group's other aliases of its branch, dropped as weak themselves
-    (docs/lsce.md, "Known limit", session 12: the paper's sidewall same n = 45 at 298.91 Hz,
-    +0.32 %, refitted with its group's dropped n = 57 pole at 354.76 Hz in the basis, has
-    its least-squares optimum at 297.91 Hz, −0.02 %); refined without them it moves the
-    wrong way (n = 47: 306.05 → 304.29 Hz, truth 307.09).
+    (share of the response under ``min_significance``: kept by the own-peak rule), with the
+    poles their group's fit dropped in the basis. A weak pole is biased by what its group's
+    fit leaves out — above all its group's other aliases of its branch, dropped as weak
+    themselves (docs/lsce.md, "Known limit", session 12: the paper's sidewall same n = 45
+    at 298.91 Hz, +0.32 %, refitted with its group's dropped n = 57 pole at 354.76 Hz in the
+    basis, has its least-squares optimum at 297.91 Hz, −0.02 %; refined without them it
+    moved the wrong way then, n = 47: 306.05 → 304.29 Hz, truth 307.09) — and by LSCE's own
+    estimate, which a group whose fit dropped nothing keeps unless refined (session 35: at
+    the band-top refinement's code the same n = 45's group drops no pole and n = 47 refined
+    comes to 306.98 Hz; over the matrix the weak refinements without a dropped pole in
+    reach brought 5 modes within 0.3 % and took 1 out, docs/lsce.md "Session 35").
 
     An edge pole whose refinement ends on its box's edge (the FRFs' least-squares optimum
     lies beyond ζ f or a factor 2 in damping) is not located by the data: LSCE's pole there
