@@ -747,6 +747,7 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1306 / 1334 (98 %) | 5 / 1855 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-12-01, end of session 35 | a weak pole refined in every order group, not only in one whose fit dropped a pole (modal.refine; the code of 01f9ada): the membrane's n = 45 and the membrane + cavity's n = 48 found, its n = 54 lost | paper | 1173 / 1182 (99 %) | 6 / 1694 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 6 min (`--jobs 2`) |
 | | | ring | 1306 / 1334 (98 %) | 5 / 1855 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
+"""
 
 
 def write_docs(records: list[dict], path: Path, elapsed_s: float, jobs: int) -> None:
