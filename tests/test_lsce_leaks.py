@@ -51,6 +51,24 @@ def test_a_weak_unpinned_pole_in_a_stronger_modes_band_is_its_leak(change, dropp
         assert "a leak of the group 13 mode" in why[0]["reason"]
 
 
+@pytest.mark.parametrize("ratio, orthogonal, dropped", [
+    (0.03, True, True),     # a copy at the test's error level: a leak on any grid
+    (0.9, False, True),     # orders mixed (a lumped mass): a copy may be as strong as this
+    (0.9, True, False),     # orders unmixed: no copy comes near its mode's strength
+])
+def test_on_unmixed_orders_a_leak_is_under_the_copy_bound(ratio, orthogonal, dropped):
+    """Condition (f) (session 36): with the orders unmixed the only copies of a mode in
+    another group are the test's own errors, under ``COPY_MAX_AMPLITUDE`` of its peak. Two
+    adjacent orders of one branch share their pattern at the sensors (MAC 1 here), so a
+    weak mode 0.9 × as strong as its neighbour of the next order, within that one's
+    half-power band, passes (a)–(e); it is no copy of it unless the orders mix."""
+    strong = STRONG | {"peak": 0.02, "sig": 0.04, "std_hz": 0.8}
+    weak = dict(f_hz=332.4, zeta=0.02, group=5, peak=ratio * 0.02, noise=0.005, std_hz=1.3)
+    assert ratio * 0.02 < strong["peak"] and abs(weak["f_hz"] - STRONG["f_hz"]) < 0.02 * STRONG["f_hz"]
+    kept, why = under_residual([_mode(**strong), _mode(**weak)], LINE_HZ, 2, orthogonal=orthogonal)
+    assert len(why) == int(dropped) and len(kept) == 2 - int(dropped)
+
+
 @pytest.fixture(scope="module")
 def ring_rim(tmp_path_factory):
     """The validation matrix's ring with a free rim through ``run`` (seeded): its record, its

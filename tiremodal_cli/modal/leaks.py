@@ -12,13 +12,13 @@ import numpy as np
 import scipy.special
 
 from tiremodal_cli.modal.lsce import poles_to_modal
-from tiremodal_cli.modal.merge import SAME_POLE_ALPHA, GroupMode, MergedMode
+from tiremodal_cli.modal.merge import COPY_MAX_AMPLITUDE, SAME_POLE_ALPHA, GroupMode, MergedMode
 
 __all__ = ["under_residual", "channel_mac", "leak_copies"]
 
 
 def under_residual(modes: list[MergedMode], line_hz: float, n_channels: int, min_significance: float = 0.05,
-                   min_mac: float = 0.9) -> tuple[list, list]:
+                   min_mac: float = 0.9, orthogonal: bool = False) -> tuple[list, list]:
     """Drop the weak leaks of a stronger mode of another order group (docs/lsce.md).
 
     A mode j is a stronger mode i seen in another order, and dropped, when all hold:
@@ -35,7 +35,14 @@ def under_residual(modes: list[MergedMode], line_hz: float, n_channels: int, min
     condition keeps real modes: (a) those the physical share supports; (c) the ring's
     sidewall same-direction modes and the paper's same-direction crowd pinned under their
     group's residual; (d) a weak mode alone; (e) a weak mode of the other branch beside a
-    strong one. Until session 10 the rule also asked (b) that j's peak in its group's rows
+    strong one. (f) With ``orthogonal`` (a complete grid whose orders the test shows unmixed,
+    :mod:`~tiremodal_cli.modal.mixing`) the only copies are the test's own errors, at the noise's
+    level: j's peak must also be under :data:`~tiremodal_cli.modal.merge.COPY_MAX_AMPLITUDE` of
+    i's, as in the merge (session 36: on a 20-point ring with the sidewall coupling, the
+    same-direction n = 45 at 520.77 Hz was dropped as a leak of n = 46, 9.9 Hz above it, at
+    0.997 of its peak — two adjacent orders of one branch share their pattern at the sensors,
+    so (e) does not tell them apart; the added mass's leaks stand at 0.02–0.05 of their mode's
+    peak). Until session 10 the rule also asked (b) that j's peak in its group's rows
     be under 3 × the group's fit residual RMS (:data:`~tiremodal_cli.modal.groupfit.PEAK_OVER_NOISE`);
     a weak mode on a peak of its own is one both above the noise and pinned (the own-peak
     rule), and a pole that wanders by several lines over the model orders is located by no
@@ -49,6 +56,7 @@ def under_residual(modes: list[MergedMode], line_hz: float, n_channels: int, min
     ----------
     modes : list of MergedMode ; line_hz : float, Hz, the band's line spacing
     n_channels : int, live response channels (the residues are channel-major)
+    orthogonal : bool, the order groups orthogonal (condition (f))
 
     Returns
     -------
@@ -66,7 +74,7 @@ def under_residual(modes: list[MergedMode], line_hz: float, n_channels: int, min
             continue
         i = max(over, key=lambda i: modes[i].peak)
         cm = channel_mac(modes[i].residues, m.residues, n_channels)
-        if cm < min_mac:
+        if cm < min_mac or (orthogonal and not m.peak < COPY_MAX_AMPLITUDE * modes[i].peak):
             kept.append(m)
             continue
         dropped.append({"frequency_hz": float(fn[j]), "damping_ratio": float(zeta[j]), "group": int(m.group),

@@ -216,7 +216,8 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
                          orthogonal=orthogonal, leak=leakage(point_angle) if gaps else None,
                          n_channels=band.Hb.shape[0])
     if not gaps:  # (with gaps: leak_copies only)
-        modes, unseen = under_residual(modes, band.freq[1] - band.freq[0], band.Hb.shape[0], opt.min_significance)
+        modes, unseen = under_residual(modes, band.freq[1] - band.freq[0], band.Hb.shape[0], opt.min_significance,
+                                       orthogonal=orthogonal)
         rejected += unseen
     return diagrams, modes, rejected, synth, kept, mixing
 
