@@ -142,3 +142,55 @@ def test_two_dof_system_poles_are_recovered_through_lsce_and_stabilization():
     for c, f0, z0 in zip(sel, fn, zt):
         assert c.freq_hz == pytest.approx(f0, rel=1e-3)
         assert c.damping_ratio == pytest.approx(z0, rel=0.05)
+
+
+def _drifting(orders, step_rad, zeta=0.02, f_hz=40.0, seed=36):
+    """A single-reference pole at ``f_hz`` over ``orders``, stable at each, whose weak shape
+    component (0.35 of the other) turns by ``step_rad`` per order, as one near its noise does
+    when the extra poles of each order take up the noise differently; the frequency
+    scattered by 1e-4."""
+    from tiremodal_cli.modal.stabilization import StablePole
+    rng = np.random.default_rng(seed)
+    out = []
+    for k, p in enumerate(orders):
+        f = f_hz * (1 + 1e-4 * rng.normal())
+        out.append(StablePole(p, _pole(f, zeta), f, zeta, np.array([0.35 * np.exp(1j * step_rad * k), 1.0]), "stable"))
+    return out
+
+
+def test_a_pole_whose_weak_shape_component_drifts_is_one_cluster():
+    """Session 36: each order's pole matches the last (MAC 0.994 ≥ tol_mac), but over ten
+    orders the shape turns so far (MAC 0.68 end to end) that the clustering splits it, each
+    part under the 6 orders a mode needs. One pole, never twice at an order, its clusters'
+    frequencies one: joined, one cluster of all ten orders. With participation vectors
+    (a poly-reference sweep) the parts stay apart: there another participation is another
+    orientation, the second member of a degenerate pair."""
+    from tiremodal_cli.modal.stabilization import _cluster, _joined
+    opt = StabilizationOptions()
+    poles = _drifting(list(range(20, 40, 2)), 0.25)
+    parts = _cluster(poles, opt)
+    assert len(parts) >= 2 and max(len(c.members) for c in parts) < 6
+    joined = _joined(parts, opt)
+    assert len(joined) == 1 and len(joined[0].members) == 10
+    for p in poles:
+        p.participation = p.shape
+    assert len(_joined(_cluster(poles, opt), opt)) == len(parts)
+
+
+def _cluster_of(orders, f_hz, zeta):
+    from tiremodal_cli.modal.stabilization import Cluster, StablePole
+    members = [StablePole(p, _pole(f, zeta), f, zeta, np.ones(2), "stable") for p, f in zip(orders, f_hz)]
+    return Cluster(members=members, orders=set(orders))
+
+
+@pytest.mark.parametrize("orders_b, f_b, zeta_b, one", [
+    ([30, 32, 34], [40.001, 39.999, 40.003], 0.02, True),    # disjoint orders, overlapping poles
+    ([26, 32, 34], [40.001, 39.999, 40.003], 0.02, False),   # both at order 26: two modes
+    ([30, 32, 34], [40.001, 39.999, 40.003], 0.022, False),  # damping 10 % apart (> tol_damping)
+    ([30, 32, 34], [40.006, 40.007, 40.009], 0.02, False),   # frequencies apart: the poles tell them
+])
+def test_clusters_are_joined_only_when_their_poles_cannot_be_told_apart(orders_b, f_b, zeta_b, one):
+    from tiremodal_cli.modal.stabilization import _joined
+    a = _cluster_of([20, 22, 24, 26], [40.0, 40.002, 39.998, 40.004], 0.02)
+    b = _cluster_of(orders_b, f_b, zeta_b)
+    assert len(_joined([a, b], StabilizationOptions())) == (1 if one else 2)
