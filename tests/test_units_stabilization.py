@@ -170,7 +170,7 @@ def test_a_pole_whose_weak_shape_component_drifts_is_one_cluster():
     poles = _drifting(list(range(20, 40, 2)), 0.25)
     parts = _cluster(poles, opt)
     assert len(parts) >= 2 and max(len(c.members) for c in parts) < 6
-    joined = _joined(parts, opt)
+    joined = _joined(parts, opt, 0.1)  # scatter 0.004 Hz: pinned within a line of 0.1 Hz
     assert len(joined) == 1 and len(joined[0].members) == 10
     for p in poles:
         p.participation = p.shape
@@ -183,14 +183,15 @@ def _cluster_of(orders, f_hz, zeta):
     return Cluster(members=members, orders=set(orders))
 
 
-@pytest.mark.parametrize("orders_b, f_b, zeta_b, one", [
-    ([30, 32, 34], [40.001, 39.999, 40.003], 0.02, True),    # disjoint orders, overlapping poles
-    ([26, 32, 34], [40.001, 39.999, 40.003], 0.02, False),   # both at order 26: two modes
-    ([30, 32, 34], [40.001, 39.999, 40.003], 0.022, False),  # damping 10 % apart (> tol_damping)
-    ([30, 32, 34], [40.006, 40.007, 40.009], 0.02, False),   # frequencies apart: the poles tell them
+@pytest.mark.parametrize("orders_b, f_b, zeta_b, line_hz, one", [
+    ([30, 32, 34], [40.001, 39.999, 40.003], 0.02, 0.01, True),    # disjoint orders, overlapping poles
+    ([26, 32, 34], [40.001, 39.999, 40.003], 0.02, 0.01, False),   # both at order 26: two modes
+    ([30, 32, 34], [40.001, 39.999, 40.003], 0.022, 0.01, False),  # damping 10 % apart (> tol_damping)
+    ([30, 32, 34], [40.006, 40.007, 40.009], 0.02, 0.01, False),   # frequencies apart: the poles tell them
+    ([30, 32, 34], [40.001, 39.999, 40.003], 0.02, 0.001, False),  # scatter over a line: not pinned
 ])
-def test_clusters_are_joined_only_when_their_poles_cannot_be_told_apart(orders_b, f_b, zeta_b, one):
+def test_clusters_are_joined_only_when_their_poles_cannot_be_told_apart(orders_b, f_b, zeta_b, line_hz, one):
     from tiremodal_cli.modal.stabilization import _joined
     a = _cluster_of([20, 22, 24, 26], [40.0, 40.002, 39.998, 40.004], 0.02)
     b = _cluster_of(orders_b, f_b, zeta_b)
-    assert len(_joined([a, b], StabilizationOptions())) == (1 if one else 2)
+    assert len(_joined([a, b], StabilizationOptions(), line_hz)) == (1 if one else 2)

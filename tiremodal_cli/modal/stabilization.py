@@ -184,7 +184,8 @@ def stabilize(band: Band, sweep_result: list[OrderPoles], opt: StabilizationOpti
         prev = cur
     orders = [op.order for op in sweep_result]
     min_count = opt.min_count if opt.min_count is not None else max(3, int(round(0.15 * len(orders))))
-    clusters = _joined(_cluster([p for p in poles if p.status == "stable"], opt), opt)
+    line_hz = float(band.freq_hz[1] - band.freq_hz[0]) if band.freq_hz.size > 1 else np.inf
+    clusters = _joined(_cluster([p for p in poles if p.status == "stable"], opt), opt, line_hz)
     for c in clusters:
         _judge(c, opt, min_count)
     _drop_duplicates(clusters, opt)
@@ -265,14 +266,17 @@ def _cluster(stable, opt):
 JOIN_ALPHA = 1e-3
 
 
-def _joined(clusters: list, opt) -> list:
+def _joined(clusters: list, opt, line_hz: float = np.inf) -> list:
     """Clusters of a single-reference sweep that are one pole split by their shapes, joined.
 
     Two clusters are one pole when no model order holds both (two modes coexist at the
-    orders that resolve them), their member frequencies' ranges overlap and a Welch test
-    of their mean frequencies does not tell them apart at :data:`JOIN_ALPHA` (a cluster
-    of one pole: against the other's prediction interval), and their median damping ratios
-    agree within ``tol_damping``. The clustering keeps them apart when the MAC of a member
+    orders that resolve them), each is pinned — its frequencies' scatter over the orders at
+    most one line ``line_hz``, the own-peak rule's (c): a test of means is no evidence of
+    one pole where the poles wander (a one-hit test's sloppy clusters, 2 + 2 poles at
+    300.2 ± 1.8 and 300.1 ± 1.1 Hz, would pass it) — their member frequencies' ranges
+    overlap and a Welch test of their mean frequencies does not tell them apart at
+    :data:`JOIN_ALPHA` (a cluster of one pole: against the other's prediction interval),
+    and their median damping ratios agree within ``tol_damping``. The clustering keeps them apart when the MAC of a member
     to the other's mean shape falls under ``cluster_mac``, which a participation vector
     with one component near its noise does as it drifts over the orders (session 36: a
     20-point ring's same-direction n = 40 at 468.93 Hz in its group 0, poles at
@@ -297,7 +301,7 @@ def _joined(clusters: list, opt) -> list:
             b = out[j]
             za, zb = a.damping_ratio, b.damping_ratio
             if (a.orders & b.orders or abs(za - zb) > opt.tol_damping * max(za, zb)
-                    or not _one_frequency(a, b)):
+                    or not _one_frequency(a, b, line_hz)):
                 j += 1
                 continue
             a.members += b.members
@@ -308,7 +312,7 @@ def _joined(clusters: list, opt) -> list:
     return out
 
 
-def _one_frequency(a: Cluster, b: Cluster) -> bool:
+def _one_frequency(a: Cluster, b: Cluster, line_hz: float = np.inf) -> bool:
     """Whether two clusters' pole frequencies can be one pole's (:func:`_joined`)."""
     fa, fb = (np.array([m.freq_hz for m in c.members]) for c in (a, b))
     if fa.size < fb.size:
@@ -316,8 +320,8 @@ def _one_frequency(a: Cluster, b: Cluster) -> bool:
     if fa.size < 2:
         return False  # two single poles: nothing to judge a scatter by
     sa = np.std(fa, ddof=1)
-    if sa == 0:
-        return False
+    if sa == 0 or sa > line_hz or (fb.size > 1 and np.std(fb, ddof=1) > line_hz):
+        return False  # no scatter to judge by, or a pole the data do not pin
     if fb.size == 1:  # one pole against the other cluster's prediction interval
         t = abs(fb[0] - fa.mean()) / (sa * np.sqrt(1 + 1 / fa.size))
         return bool(2 * scipy.stats.t.sf(t, fa.size - 1) >= JOIN_ALPHA)
