@@ -35,19 +35,11 @@ def under_residual(modes: list[MergedMode], line_hz: float, n_channels: int, min
     condition keeps real modes: (a) those the physical share supports; (c) the ring's
     sidewall same-direction modes and the paper's same-direction crowd pinned under their
     group's residual; (d) a weak mode alone; (e) a weak mode of the other branch beside a
-    strong one. (f) With ``orthogonal`` (a complete grid whose orders the test shows unmixed,
-    :mod:`~tiremodal_cli.modal.mixing`) the only copies are the test's own errors, at the noise's
-    level: j's peak must also be under :data:`~tiremodal_cli.modal.merge.COPY_MAX_AMPLITUDE` of
-    i's, as in the merge (session 36: on a 20-point ring with the sidewall coupling, the
-    same-direction n = 45 at 520.77 Hz was dropped as a leak of n = 46, 9.9 Hz above it, at
-    0.997 of its peak — two adjacent orders of one branch share their pattern at the sensors,
-    so (e) does not tell them apart; the added mass's leaks stand at 0.02–0.05 of their mode's
-    peak). Until session 10 the rule also asked (b) that j's peak in its group's rows
-    be under 3 × the group's fit residual RMS (:data:`~tiremodal_cli.modal.groupfit.PEAK_OVER_NOISE`);
-    a weak mode on a peak of its own is one both above the noise and pinned (the own-peak
-    rule), and a pole that wanders by several lines over the model orders is located by no
-    peak, however high the leak it is fitted to (the ring's added-mass leaks at 406.72 and
-    708.11 Hz stand 5 × above their group's residual and scatter by 3 and 4.6 lines).
+    strong one. (f) With ``orthogonal`` (the orders unmixed, :mod:`~tiremodal_cli.modal.mixing`)
+    j's peak is under :data:`~tiremodal_cli.modal.merge.COPY_MAX_AMPLITUDE` of i's: the only
+    copies are then the test's errors, and adjacent orders of one branch pass (e) (session 36,
+    docs/lsce.md). Until session 10 the rule also asked (b) a peak under 3 × the group's
+    residual RMS; a pole that wanders over the orders is located by no peak (docs/lsce.md).
     Then :func:`_leak_twins`. For a complete grid (or no spatial split): with points
     missing, every group's residual holds every order's leak (those are judged by
     :func:`leak_copies`).
