@@ -425,6 +425,8 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1299 / 1334 (97 %) | 6 | 7 / 1849 (0.4 %) | 0 | 14 / 14 | 0 |
 | seeds + 2000, session 35 (as above) | 01f9ada | paper | **1166** / 1182 (99 %) | 2 | **8** / 1681 (0.5 %) | 0 | 13 / 13 | 0 |
 | | | ring | 1299 / 1334 (97 %) | 6 | 7 / 1849 (0.4 %) | 0 | 14 / 14 | 0 |
+| seeds + 1000, session 36 (a leak under the copy bound on unmixed orders; a single-reference pole split by its drifting shape joined) | 17562b1 | paper | **1165** / 1182 (99 %) | 2 | **12** / 1660 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | **1303** / 1334 (98 %) | 4 | **12** / 1869 (0.6 %) | 0 | 14 / 14 | 0 |
 
 Session 31's rows, case by case against session 30's (6d57eb6) at the same seeds on the same
 machine: at + 1000 the ring's noise case loses a spurious row (224.82 Hz), its sidewall coupling
@@ -661,6 +663,8 @@ here the 20-point extensible + coupling test still adopts air_cavity beside its 
 | | | ring | 682 / 704 (97 %) | 5 | 5 / 873 (0.6 %) | 0 | 10 / 12 |
 | held-out levels | 01f9ada | paper | 672 / 685 (98 %) | 2 | 8 / 870 (0.9 %) | 0 | 12 / 12 |
 | | | ring | 682 / 704 (97 %) | 5 | **6** / 873 (0.7 %) | 0 | 10 / 12 |
+| held-out levels, session 36 (a leak under the copy bound on unmixed orders: modal.leaks; a single-reference pole split by its drifting shape joined: modal.stabilization) | 17562b1 | paper | **673** / 685 (98 %) | 2 | 8 / 873 (0.9 %) | 0 | 12 / 12 |
+| | | ring | **686** / 704 (97 %) | 5 | 6 / 878 (0.7 %) | 0 | **11** / 12 |
 
 The paper's 36-point 1 s membrane test trades a row at 367.34 Hz for one at 338.05 Hz; the
 ring's 20-point extensible + coupling test gains one at 723.12 Hz. Nothing else moves.
