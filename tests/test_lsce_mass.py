@@ -84,3 +84,31 @@ def test_an_added_masss_leaks_are_dropped_and_no_mode_lost(ring_mass):
         assert all(d["status"] == "found" for d in near), (f, near)
     assert rec["spurious"] <= 0.05 * rec["adopted"], rec["spurious_hz"]
     assert rec["found"] >= 39
+
+
+@pytest.fixture(scope="module")
+def coupling_mass(tmp_path_factory):
+    """The validation matrix's ring with sidewall coupling and an added mass off the
+    sensors' plane, through ``run`` (seeded): its record."""
+    case = next(c for c in matrix() if c.name == "ring:physics=sidewall_coupling+mass")
+    return run_case(case, tmp_path_factory.mktemp("coupling_mass"))
+
+
+@pytest.mark.parametrize("n", [36, 41, 42])
+def test_a_weak_mode_on_mixed_orders_is_not_taken_for_a_stronger_modes_copy(coupling_mass, n):
+    """Session 37: the generator's (FE ring's) same-direction n = 41 (479.23 Hz) and 42
+    (489.52 Hz) each lie within the half-power half-width of a member of the mass-split
+    opposite n = 19, 60–1,100 × stronger, whose shares the mass puts into every order group.
+    Their own groups (7 and 8) pin them within 0.04 % (scatter 0.29 and 0.22 Hz over the model
+    orders) but at 2–3 × a residual that is mostly misfit, and the swap test merged them into
+    the opposite members 2.4 and 5.7 Hz away (``merge._pinned_apart``: two poles pinned apart
+    are two modes where the orders mix). The same n = 36 (428.27 Hz, group 2), found, was
+    read as n = 46: its tread, which barely moves, held mostly a share of group 12's
+    (``classify``: on mixed orders a merged mode is read at its group; the symmetry broken by
+    a mass off the sensors' plane is such a test). Each found within 0.3 % with its order
+    (flagged aliased: 34 points) and branch."""
+    rec = coupling_mass
+    assert rec["status"] == "ok"
+    truth = [d for d in rec["detail"] if d["n"] == n and d["branch"] == "same"]
+    assert len(truth) == 1 and truth[0]["status"] == "found", truth
+    assert rec["spurious"] <= 0.05 * rec["adopted"], rec["spurious_hz"]

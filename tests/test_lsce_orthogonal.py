@@ -156,3 +156,48 @@ def test_a_pole_without_a_peak_of_its_own_is_the_stronger_modes_copy():
     assert len(merge_groups([strong, weak], line_hz=0.5)) == 1
     assert len(merge_groups([strong, dataclasses.replace(weak, visibility=5.0)], line_hz=0.5)) == 2
     assert len(merge_groups([strong, dataclasses.replace(weak, frequency_std_hz=0.05)], line_hz=0.5)) == 2
+
+
+def test_on_mixed_orders_a_pinned_pole_of_its_own_group_is_not_a_copy():
+    """The matrix's sidewall coupling + mass: the same n = 42 at 489.70 Hz in group 8 (truth
+    489.52 Hz), 0.22 Hz scatter over the model orders, 2.1 × its best row's residual — a
+    residual that is mostly misfit where the mass mixes the orders (off the sensors' plane:
+    no symmetry about it), so its group's data accept any pole near it — beside the
+    opposite n = 19's member at 483.99 Hz in group 15 (0.01 Hz scatter, 1,100 × its energy),
+    whose channels it moves otherwise (sidewall-led; MAC 0.68). A strong mode's share in
+    another group is its own pole, placed there within its scatter: on mixed orders two
+    poles pinned 5.7 Hz apart are two modes (session 37, ``modal.own_mode``). Each condition
+    is needed: on unmixed orders the weaker must still be visible (a free rim's pinned leak
+    3.8 Hz above the opposite n = 18, 1.6 × its group's residual); a weaker pole that wanders
+    over the orders, lies within a line of the stronger, moves the channels as it does (a
+    copy of its split partner, MAC 0.985–1.000 on the matrix) or has a stronger pole of its
+    own group within its half-power half-width (the held-out 36-point ring with a mass: a
+    pinned pole 1.3 Hz from its group's 100 × stronger n = 7, no mode) is still the swap
+    test's to merge; with one channel the rule says nothing."""
+    import dataclasses
+
+    from tiremodal_cli.modal.groupfit import PEAK_OVER_NOISE
+    from tiremodal_cli.modal.merge import merge_groups
+
+    def channels(m, tread, sidewall):  # 2 channels × 3 points, channel-major
+        return dataclasses.replace(m, residues=np.outer([tread, sidewall], [1.0, -0.5, -0.5]).astype(complex).ravel())
+
+    strong = dataclasses.replace(channels(_group_mode(483.99, 15, 1.0, 0.01, accepts_any=True), 1.0, 0.6),
+                                 visibility=117.0)
+    weak = dataclasses.replace(channels(_group_mode(489.70, 8, 0.03, 0.22, accepts_any=True), 0.012, 0.03),
+                               visibility=2.1, significance=0.018)
+    assert weak.visibility < PEAK_OVER_NOISE
+
+    def n_modes(*modes, mixed=True, n_channels=2):
+        return len(merge_groups(list(modes), line_hz=0.5, mixed=mixed, n_channels=n_channels))
+
+    assert n_modes(strong, weak) == 2
+    assert n_modes(strong, weak, mixed=False) == 1
+    assert n_modes(strong, weak, n_channels=1) == 1
+    assert n_modes(strong, dataclasses.replace(weak, frequency_std_hz=0.8)) == 1  # wanders over a line
+    assert n_modes(strong, channels(weak, 0.03, 0.018)) == 1  # the stronger one's channel shape: a copy
+    near = dataclasses.replace(weak, pole=weak.pole * 484.40 / 489.70)  # 0.41 Hz: within a line
+    assert n_modes(strong, near) == 1
+    own = channels(_group_mode(490.50, 8, 0.5, 0.01, accepts_any=True), 0.4, 1.0)  # its group's, 0.8 Hz away
+    assert n_modes(strong, weak, own) == 2
+    assert n_modes(strong, weak, dataclasses.replace(own, pole=own.pole * 1.05)) == 3  # 25 Hz: outside ζ f

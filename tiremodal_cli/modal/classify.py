@@ -112,9 +112,10 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     group : (n_modes,) int array, optional — the order group each mode's pole was estimated
         in; on a grid with missing points a spatial reading that disagrees with it is read
         at the group's order (:func:`_read`)
-    mixed : bool — the test's orders mix (:mod:`~tiremodal_cli.modal.mixing`: a lumped mass):
-        a merged mode's shape sums its copies' shares of other groups, and it is read at the
-        group its pole was estimated in, as on a grid with missing points
+    mixed : bool — the test's orders mix (a lumped mass: :mod:`~tiremodal_cli.modal.mixing` on
+        a structure symmetric about its sensors, or no such symmetry, :mod:`~tiremodal_cli.modal.symmetry`,
+        since session 37): a merged mode's shape sums its copies' shares of other groups, and
+        it is read at the group its pole was estimated in, as on a grid with missing points
 
     Returns
     -------

@@ -18,6 +18,7 @@ from tiremodal_cli.frf.windows import correct_poles
 from tiremodal_cli.modal.groupfit import PEAK_OVER_NOISE, PIN_SIGMAS
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import mpc
+from tiremodal_cli.modal.own_mode import channel_shape, own_mode
 
 __all__ = ["GroupMode", "MergedMode", "SAME_POLE_ALPHA", "SAME_POLE_FLOOR_BW", "COPY_MAX_AMPLITUDE", "CHANNEL_MAC_MAX",
            "channel_shape", "swap_cost",
@@ -109,7 +110,7 @@ def swap_cost(rows, synthesis, s, k, refit):
 
 def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz: float = 0.0,
                  min_significance: float = 0.05, orthogonal: bool = False, leak=None,
-                 n_channels: int = 1) -> list[MergedMode]:
+                 n_channels: int = 1, mixed: bool = False) -> list[MergedMode]:
     """One mode per physical pole.
 
     Candidates: poles of other order groups within the dominant pole's half-power
@@ -125,7 +126,8 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
     two modes of neighbouring orders (the opposite branch's n = 0 and 1 lie 0.15 % apart,
     a twentieth of a bandwidth) are rejected by their own data, however close; two weak
     poles pinned apart are two modes (:func:`_pinned_apart`; ``line_hz`` (Hz, 0: not
-    applied) and ``min_significance`` are its). Two poles are two modes however close
+    applied) and ``min_significance`` are its), and where the orders mix (``mixed``) a pole
+    of its own group pinned apart (:func:`~tiremodal_cli.modal.own_mode.own_mode`). Two poles are two modes however close
     (:func:`_two_modes`) when they move the ``n_channels`` channels otherwise
     (:func:`_other_channel_shape`) or, with ``orthogonal`` (FRFs that show a symmetric
     structure, :mod:`~tiremodal_cli.modal.symmetry`), when each is located by its own
@@ -151,7 +153,7 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
                        and abs(fn[j] - fn[i]) <= zeta[i] * fn[i]), key=lambda j: abs(fn[j] - fn[i]))
         for j in near:
             how = _joins(found, i, j, groups_seen, fn, zeta, energy[j] / energy[i], thr, line_hz, min_significance,
-                         n_channels, orthogonal, leak)
+                         n_channels, orthogonal, leak, mixed)
             if how == "channels":  # another mode by its channel shape alone (merged otherwise)
                 by_channels.add(j)
             elif how == "same":
@@ -169,7 +171,7 @@ def merge_groups(found: list[GroupMode], alpha: float = SAME_POLE_ALPHA, line_hz
 
 
 def _joins(found, i, j, groups_seen: dict, fn, zeta, ratio, thr, line_hz, min_significance, n_channels, orthogonal,
-           leak) -> str | None:
+           leak, mixed=False) -> str | None:
     """How the weaker pole ``j`` of another group meets the dominant ``i``'s mode
     (:func:`merge_groups`): "same" (one pole: its share is added), "channels" (another mode
     by its channel shape alone, where the other rules would have merged it) or None."""
@@ -180,7 +182,8 @@ def _joins(found, i, j, groups_seen: dict, fn, zeta, ratio, thr, line_hz, min_si
     floor = abs(fn[j] - fn[i]) <= SAME_POLE_FLOOR_BW * 2 * zeta[i] * fn[i]
     # neither on a peak of its own nor pinned by its group's data: nothing tells it from a's copy
     unseen = line_hz > 0 and b.visibility < PEAK_OVER_NOISE and b.frequency_std_hz > line_hz
-    apart = _pinned_apart(a, b, fn[i], fn[j], line_hz, min_significance)
+    apart = (_pinned_apart(a, b, fn[i], fn[j], line_hz, min_significance)
+             or (mixed and own_mode(found, i, j, fn, zeta, line_hz, n_channels)))
     if not (floor or unseen or (not apart and (b.swap_cost(a.pole) <= thr or a.swap_cost(b.pole) <= thr))):
         return None
     # one normal mode seen twice: its shares add up in phase; a share that would turn a
@@ -231,12 +234,6 @@ COPY_MAX_AMPLITUDE = 0.05
 #: two poles whose channel shapes are nearer orthogonal than parallel (MAC below 1/2, an
 #: angle over 45°) are two modes (:func:`_other_channel_shape`)
 CHANNEL_MAC_MAX = 0.5
-
-
-def channel_shape(m: GroupMode, n_channels: int) -> np.ndarray:
-    """The pole's shape over the channels: the first left singular vector of its physical
-    residues as (n_channels, n_points) (channel-major, as the band's FRFs)."""
-    return np.linalg.svd(np.asarray(m.residues).reshape(n_channels, -1), full_matrices=False)[0][:, 0]
 
 
 def _other_channel_shape(a: GroupMode, b: GroupMode, n_channels: int, line_hz: float) -> bool:

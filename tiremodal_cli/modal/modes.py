@@ -44,7 +44,7 @@ from tiremodal_cli.modal.table import table_from_result
 log = logging.getLogger(__name__)
 GROUP_MAX_ORDER = 40  # an order group holds a few modes, plus what models the band edges
 
-__all__ = ["ModalOptions", "ModalResult", "estimate_modes", "is_circumferential", "modal_table_from_frf", "confirmed"]
+__all__ = ["GROUP_MAX_ORDER", "ModalOptions", "ModalResult", "estimate_modes", "is_circumferential", "modal_table_from_frf", "confirmed"]
 
 
 @dataclass(frozen=True)
@@ -212,9 +212,10 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
         found, copies = leak_copies(found, leakage(point_angle))
         rejected += copies
     orthogonal = orthogonal and not (mixing and mixing["mixed"])  # a lumped mass on the sensors' plane (modal.mixing)
+    mixed = not orthogonal and not gaps  # a complete grid whose groups are no complete model of their orders
     modes = merge_groups(found, line_hz=band.freq[1] - band.freq[0], min_significance=opt.min_significance,
                          orthogonal=orthogonal, leak=leakage(point_angle) if gaps else None,
-                         n_channels=band.Hb.shape[0])
+                         n_channels=band.Hb.shape[0], mixed=mixed)
     if not gaps:  # (with gaps: leak_copies only)
         modes, unseen = under_residual(modes, band.freq[1] - band.freq[0], band.Hb.shape[0], opt.min_significance,
                                        orthogonal=orthogonal)
@@ -266,6 +267,29 @@ def _order_groups(band: _Band, point_angle, spatial: bool, opt: ModalOptions):
     poly = min(opt.poly_order, max(1, top // 2)) if top < group_max else opt.poly_order
     poly = order_for_lines(poly, K, opt.order_within_band, n_ref=2) if spatial else poly
     return groups, top, replace(opt, poly_order=poly)
+
+
+def _classified(res: ModalResult, r) -> tuple:
+    """The modes of a tyre test (points round a tread) classified by order and branch, their
+    misreads dropped (:func:`~tiremodal_cli.modal.misreads.without_misreads`) and their crowds in
+    ``meta["crowds"]``: (result, classifications, or None when there is no tread to read)."""
+    live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels]
+    locs = [r.channel_location[i] for i in live]
+    if not res.meta["spatial"] or "tread" not in locs:
+        return res, None
+    share = res.meta.get("antisymmetric_share")  # None: not measured (no sensor angles)
+    # the orders mix: a lumped mass on the sensors' plane (modal.mixing), or off it (no symmetry)
+    mixed = bool((res.meta.get("order_mixing") or {}).get("mixed")) or bool(share and share >= COPY_MAX_AMPLITUDE)
+    res, classes = without_misreads(res, lambda m: classify(
+        m.freq_hz, m.shapes[:, live], r.point_angle, locs, m.significance, m.damping_ratio,
+        m.meta.get("significance_in_group"), m.group, mixed=mixed),
+        symmetric=share is not None and not mixed)
+    res.meta["crowds"] = [{"frequency_hz": float(res.freq_hz[i]), "n_spatial": c.n_spatial,
+                           "n_candidates": list(c.n_candidates),
+                           "reason": "orders aliasing onto one spatial order lie within one half-power "
+                                     "bandwidth by the branch's dispersion: the order cannot be told"}
+                          for i, c in enumerate(classes) if c.crowd]
+    return res, classes
 
 
 def _result(band: _Band, shape, modes, synth, exp_tau_s, *, diagrams, rejected, meta) -> ModalResult:
@@ -330,21 +354,7 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
                          form=r.form, exp_tau_s=r.exp_tau_s, opt=opt, progress=progress, channel_angle=r.channel_angle)
     res.meta["band_reason"] = why
     res.meta["method"] = opt.method
-    classes = None
-    if res.meta["spatial"]:
-        live = [i for i, n in enumerate(r.channel_name) if n not in r.dead_channels]
-        locs = [r.channel_location[i] for i in live]
-        if "tread" in locs:
-            share, mixed = res.meta.get("antisymmetric_share"), bool((res.meta.get("order_mixing") or {}).get("mixed"))
-            res, classes = without_misreads(res, lambda m: classify(
-                m.freq_hz, m.shapes[:, live], r.point_angle, locs, m.significance, m.damping_ratio,
-                m.meta.get("significance_in_group"), m.group, mixed=mixed),
-                symmetric=share is not None and share < COPY_MAX_AMPLITUDE and not mixed)
-            res.meta["crowds"] = [{"frequency_hz": float(res.freq_hz[i]), "n_spatial": c.n_spatial,
-                                   "n_candidates": list(c.n_candidates),
-                                   "reason": "orders aliasing onto one spatial order lie within one half-power "
-                                             "bandwidth by the branch's dispersion: the order cannot be told"}
-                                  for i, c in enumerate(classes) if c.crowd]
+    res, classes = _classified(res, r)
     table = table_from_result(res, classes, point_angle=r.point_angle, point_index=r.point_index,
                               channel_name=r.channel_name, channel_location=r.channel_location,
                               channel_angle=r.channel_angle, form=r.form)
