@@ -13,7 +13,7 @@ from tiremodal_cli.io.frfuff import read_frf_uff
 from tiremodal_cli.io.ingest import load_channel_map
 from tiremodal_cli.io.modalfile import to_csv, write_modal
 from tiremodal_cli.modal.table import to_rows
-from tiremodal_cli.modal.modes import ModalOptions, modal_table_from_frf
+from tiremodal_cli.modal.modes import GROUP_MAX_ORDER, ModalOptions, modal_table_from_frf
 from tiremodal_cli.modal.stabilization import StabilizationOptions
 from tiremodal_cli.cli.main import cli
 from tiremodal_cli.cli.options import FiniteRange, PlotPath, Progress, band_option, echo_json, json_option, overwrite_option, say
@@ -38,7 +38,7 @@ def read_any_frf(path: Path, mapping=None):
               help="Modal file to write (HDF5).")
 @band_option("Analysis band, Hz (default: where the coherence supports the estimate).")
 @click.option("--max-order", type=click.IntRange(2, 400), default=120, show_default=True,
-              help="Highest model order of the sweep (per circumferential order: at most 24).")
+              help=f"Highest model order of the sweep (per circumferential order: at most {GROUP_MAX_ORDER}).")
 @click.option("--spatial", type=click.Choice(["auto", "on", "off"]), default="auto", show_default=True,
               help="Split tyre FRFs into circumferential orders before the sweep.")
 @click.option("--method", type=click.Choice(["lsce", "plscf", "both"]), default="lsce", show_default=True,
