@@ -427,6 +427,8 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1299 / 1334 (97 %) | 6 | 7 / 1849 (0.4 %) | 0 | 14 / 14 | 0 |
 | seeds + 1000, session 36 (a leak under the copy bound on unmixed orders; a single-reference pole split by its drifting shape joined) | 17562b1 | paper | **1165** / 1182 (99 %) | 2 | **12** / 1660 (0.7 %) | 0 | 13 / 13 | 0 |
 | | | ring | **1303** / 1334 (98 %) | 4 | **12** / 1869 (0.6 %) | 0 | 14 / 14 | 0 |
+| seeds + 1000, session 37 (on mixed orders a pinned pole of its own group, moving the channels otherwise, is no copy: modal.own_mode; read at its group where the symmetry is broken: classify) | 27080b6 | paper | 1165 / 1182 (99 %) | 2 | 12 / 1664 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | **1305** / 1334 (98 %) | 4 | 12 / 1873 (0.6 %) | 0 | 14 / 14 | 0 |
 
 Session 31's rows, case by case against session 30's (6d57eb6) at the same seeds on the same
 machine: at + 1000 the ring's noise case loses a spurious row (224.82 Hz), its sidewall coupling
@@ -665,9 +667,13 @@ here the 20-point extensible + coupling test still adopts air_cavity beside its 
 | | | ring | 682 / 704 (97 %) | 5 | **6** / 873 (0.7 %) | 0 | 10 / 12 |
 | held-out levels, session 36 (a leak under the copy bound on unmixed orders: modal.leaks; a single-reference pole split by its drifting shape joined: modal.stabilization) | 17562b1 | paper | **673** / 685 (98 %) | 2 | 8 / 873 (0.9 %) | 0 | 12 / 12 |
 | | | ring | **686** / 704 (97 %) | 5 | 6 / 878 (0.7 %) | 0 | **11** / 12 |
+| held-out levels, session 37 (on mixed orders a pinned pole of its own group, moving the channels otherwise, is no copy: modal.own_mode; read at its group where the symmetry is broken: classify) | 27080b6 | paper | 673 / 685 (98 %) | 2 | 8 / 873 (0.9 %) | 0 | 12 / 12 |
+| | | ring | 686 / 704 (97 %) | 5 | 6 / 877 (0.7 %) | 0 | 11 / 12 |
 
 The paper's 36-point 1 s membrane test trades a row at 367.34 Hz for one at 338.05 Hz; the
 ring's 20-point extensible + coupling test gains one at 723.12 Hz. Nothing else moves.
+Session 37: nothing moves but the ring's 36-point extensible + mass test, one surplus row
+fewer (64 → 63 adopted, every count the same).
 
 """
 
@@ -751,6 +757,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1306 / 1334 (98 %) | 5 / 1855 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-12-01, end of session 35 | a weak pole refined in every order group, not only in one whose fit dropped a pole (modal.refine; the code of 01f9ada): the membrane's n = 45 and the membrane + cavity's n = 48 found, its n = 54 lost | paper | 1173 / 1182 (99 %) | 6 / 1694 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 6 min (`--jobs 2`) |
 | | | ring | 1306 / 1334 (98 %) | 5 / 1855 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-12-02, end of session 37 | session 36's leak copy bound and joined clusters (the matrix unchanged by them), and on mixed orders a pinned pole of its own group that moves the channels otherwise is no copy of a stronger mode (modal.own_mode), read at its group where the symmetry is broken (classify; the code of 27080b6): the sidewall coupling + mass's same n = 41 and 42 found, its n = 36 no longer mislabelled | paper | 1173 / 1182 (99 %) | 6 / 1694 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 7 min (`--jobs 2`) |
+| | | ring | **1309** / 1334 (98 %) | 5 / 1857 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
