@@ -81,6 +81,34 @@ def test_a_weak_mode_out_of_order_narrower_than_its_neighbours_is_no_blend_and_s
     assert out.freq_hz.size == 5 and not out.rejected and not classes[3].in_order
 
 
+@pytest.mark.parametrize("symmetric, mixed, kept_as", [(True, False, 1), (False, False, None), (True, True, 23)])
+def test_a_weak_mode_of_another_family_on_a_symmetric_structure_stays(symmetric, mixed, kept_as):
+    """n = 1 … 6 rising (140–200 Hz), and a second n = 1 reading at 172 Hz, weak in the
+    physical FRFs (10 %: beside stronger modes of other orders) but clear in its own order
+    group. Its alias on 24 points, n = 23, would sit below the branch's n = 5 at 185 Hz:
+    the branch contradicts it, so it is a mode of another family at its spatial order. On a
+    structure symmetric about its sensors (orders unmixed: no group holds another order's
+    leak) it is kept as n = 1, out of order; without that symmetry it is dropped as a
+    misread; with the orders mixed (a mass) its group's share is no evidence, and the walk
+    reads it as the alias (not a misread: aliased readings are not judged)."""
+    res, th = _result([140.0, 150.0, 160.0, 170.0, 172.0, 185.0, 200.0], [1, 2, 3, 4, 1, 5, 6],
+                      [0.6, 0.6, 0.6, 0.6, 0.10, 0.6, 0.6])
+
+    def classes_of(m):
+        return classify(m.freq_hz, m.shapes, th, LOCS, m.significance, m.damping_ratio,
+                        m.meta.get("significance_in_group"), mixed=mixed)
+
+    out, classes = without_misreads(res, classes_of, symmetric=symmetric)
+    if kept_as is None:
+        assert out.freq_hz.tolist() == [140.0, 150.0, 160.0, 170.0, 185.0, 200.0]
+        assert len(out.rejected) == 1 and "misread order" in out.rejected[0]["reason"]
+    else:
+        assert out.freq_hz.size == 7 and not out.rejected
+        assert classes[4].n == kept_as and classes[4].aliased == (kept_as != 1)
+        assert classes[4].other_family == (kept_as == 1) and not classes[4].in_order
+    assert [c.n for c, f in zip(classes, out.freq_hz) if f != 172.0] == [1, 2, 3, 4, 5, 6]
+
+
 @pytest.mark.parametrize("symmetric, zeta_b, dropped", [(True, 0.035, True), (False, 0.035, False),
                                                          (True, 0.01, False)])
 def test_a_split_pair_on_a_symmetric_structure_loses_its_weaker_broader_member(symmetric, zeta_b, dropped):
@@ -114,6 +142,20 @@ def test_the_added_masss_blends_are_not_adopted(tmp_path):
     truth = np.array([m["frequency_hz"] for m in simulate(config_for(case)).truth["modes"]])
     blends = [f for f in dropped if 168.0 < f < 183.5]
     assert len(blends) >= 6 and all(np.min(np.abs(truth / f - 1)) > TOLERANCE for f in blends)
+
+
+def test_the_ring_sidewall_shears_weak_n1_is_read_as_n1(tmp_path):
+    """The finite-element ring with sidewall shear (its truth, not the estimator's model):
+    a second same-direction n = 1 at 98.32 Hz, 0.015 Hz from the branch's n = 4 and 10 % of
+    the physical response there, was read as the alias n = 33 until session 38; it is found
+    as n = 1, with every other expected mode, and the diagnosis stays right."""
+    case = next(c for c in matrix() if c.name == "ring:physics=sidewall_shear")  # the matrix's seed
+    with threadpool_limits(1):
+        rec = run_case(case, tmp_path)
+    assert rec["status"] == "ok" and rec["diagnosis_right"]
+    n1 = [d for d in rec["detail"] if d["n"] == 1 and d["branch"] == "same" and 95 < d["frequency_hz"] < 100]
+    assert len(n1) == 1 and n1[0]["status"] == "found"
+    assert rec["found"] == rec["expected"] and rec["spurious"] == 0
 
 
 @pytest.mark.parametrize("by_channels, crowd, dropped", [(True, True, True), (True, False, False),

@@ -43,17 +43,30 @@ class BranchModes:
     free_rim: bool = False
     complete: bool = True  # every point of the grid measured (no failed points)
     damping: np.ndarray | None = None  # damping ratios: a half-power bandwidth for the alias choice
+    mixed: bool = False  # the orders mix (a lumped mass): a group's rows hold other orders' leaks
+
+    def clear_in_group(self, r: int) -> bool:
+        """Both confidences ≥ 0.5 and a significance ≥ 0.3 in its own order group (a mode
+        weak in the physical FRFs beside far stronger ones of other orders), on a test whose
+        orders do not mix (where they do, a group's share holds other orders' leaks)."""
+        return (not self.mixed and self.reads[r].sure and self.significance_group is not None
+                and self.significance_group[r] >= 0.3)
 
     def clear(self, r: int) -> bool:
         """Both confidences ≥ 0.5 and (when known) significance ≥ 0.3."""
         return self.reads[r].sure and (self.significance is None or self.significance[r] >= 0.3)
 
 
-def resolve_aliases(m: BranchModes) -> list[int]:
+def resolve_aliases(m: BranchModes) -> tuple[list[int], set[int]]:
     """Each mode's order n: within a branch, n rises with frequency; aliasing can only start
     once the branch has reached the grid's highest order (⌊N/2⌋), and only clear modes
-    (both confidences ≥ 0.5) move the mark."""
+    (both confidences ≥ 0.5) move the mark.
+
+    Returns (orders, one per mode; the modes of another family — every alias of theirs
+    contradicted by the branch above them, :func:`_contradicted` — which keep their spatial
+    order)."""
     ns = [o.n_spatial for o in m.reads]
+    families: set[int] = set()
     for br in {o.branch for o in m.reads}:
         idx = sorted((r for r in range(len(m.reads)) if m.reads[r].branch == br), key=lambda r: m.freq_hz[r])
         own: set[int] = set()
@@ -63,7 +76,8 @@ def resolve_aliases(m: BranchModes) -> list[int]:
             if not wrong:
                 break
             own |= wrong
-    return ns
+        families |= own
+    return ns, families
 
 
 def _contradicted(m: BranchModes, idx: list[int], ns: list[int]) -> set[int]:
@@ -76,12 +90,16 @@ def _contradicted(m: BranchModes, idx: list[int], ns: list[int]) -> set[int]:
     and n = 6 at 126 Hz); it keeps its spatial order. Only on a complete grid: with points
     missing every order leaks into every spatial reading (:mod:`tiremodal_cli.modal.gaps`),
     and the paper's failed-points case's n = 8 same at 147.2 Hz, read as spatial order 2, was
-    given n = 2 (its diagnosis's final fit 0.09 → 2.1 % RMS, 8 modes set aside)."""
+    given n = 2 (its diagnosis's final fit 0.09 → 2.1 % RMS, 8 modes set aside). The mode
+    must be clear, or clear in its own order group on a test whose orders do not mix
+    (:meth:`BranchModes.clear_in_group`, session 38: the shear's n = 1 at 98.32 Hz explains
+    10 % of the physical response beside the branch's n = 4 0.015 Hz away, and was read
+    n = 33)."""
     f, reads = m.freq_hz, m.reads
     out = set()
     for i, r in enumerate(idx):
         n_s = reads[r].n_spatial
-        if ns[r] == n_s or not m.clear(r):  # a weak mode's reading is no evidence against the walk
+        if ns[r] == n_s or not (m.clear(r) or m.clear_in_group(r)):  # a weak reading is no evidence
             continue
         if any(f[q] > 1.05 * f[r] and m.clear(q) and ns[q] == reads[q].n_spatial and n_s < ns[q] < ns[r]
                for q in idx[i + 1:]):

@@ -67,6 +67,9 @@ class Classification:
     in_order: bool = True
     crowd: bool = False
     n_candidates: tuple = ()
+    #: a mode of another family than its branch's at its order: read at its spatial order
+    #: because the branch above it contradicts every alias (``alias_walk._contradicted``)
+    other_family: bool = False
 
     def to_dict(self):
         return {"n": self.n, "n_spatial": self.n_spatial, "n_confidence": self.n_confidence,
@@ -129,9 +132,10 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
     reads = [_read(shapes[r], it, isw, point_angle, int(group[r]) if (gappy or mixed) and group is not None else None)
              for r in range(len(freq_hz))]
     free_rim = _free_rim(shapes, locs)
-    ns = resolve_aliases(BranchModes(freq_hz, reads, n_p, significance, significance_group, free_rim,
+    ns, families = resolve_aliases(BranchModes(freq_hz, reads, n_p, significance, significance_group, free_rim,
                                  complete=n_p == len(point_angle),
-                                 damping=None if damping_ratio is None else np.asarray(damping_ratio, float)))
+                                 damping=None if damping_ratio is None else np.asarray(damping_ratio, float),
+                                 mixed=mixed))
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
     reads = _partners_branches(freq_hz, reads, ns)
     reads = _other_branch(freq_hz, reads, ns, in_order, n_p, significance)
@@ -149,7 +153,7 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
                                   aliased=bool(ns[r] != o.n_spatial or any(c > n_top for c in cands)),
                                   branch=o.branch, branch_confidence=o.branch_confidence, pair=pairs[r][0],
                                   splitting_hz=pairs[r][1], in_order=bool(in_order[r]), crowd=bool(cands),
-                                  n_candidates=tuple(cands)))
+                                  n_candidates=tuple(cands), other_family=r in families))
     return res
 
 

@@ -36,8 +36,13 @@ the ring's sidewall coupling + mass, one in a 48-point combination) 0.010–0.09
 the 42 others within 0.3 % of a truth mode of another order (mostly the crowd under the
 sidewall resonance seen in a low group) 0.037–0.49, 38 of them below 0.15. 0.15 lies in
 the gap, 1.6 × above the largest blend and 1.9 × below the weakest true mode. A true
-off-branch mode under 15 % of the response in its half-power band would be lost (none in
-the matrix).
+off-branch mode under 15 % of the response in its half-power band would be lost: the
+matrix holds one (the ring's sidewall-shear n = 1 same at 98.32 Hz, 10 %, beside the
+branch's n = 4 0.015 Hz away), read as an alias until session 38. Since then a mode of
+another family (``Classification.other_family``: the branch above it contradicts every
+alias of its spatial order) is spared on a test whose FRFs show a structure symmetric
+about its sensors, where an order group's rows hold no other order's leak and the alias
+class no crowd there.
 
 **Crowd blends** (session 30; :func:`crowd_blends`). The merge keeps a weaker pole of another
 order group apart from a stronger one when it moves the channels otherwise
@@ -70,19 +75,27 @@ __all__ = ["MISREAD_MAX_SIGNIFICANCE", "misread", "crowd_blends", "false_splits"
 MISREAD_MAX_SIGNIFICANCE = 0.15
 
 
-def misread(classes, freq_hz, damping_ratio, significance) -> np.ndarray:
+def misread(classes, freq_hz, damping_ratio, significance, symmetric: bool = False) -> np.ndarray:
     """(n_modes,) bool: the modes out of their branch's dispersion order, read at their
     spatial order (not aliased), explaining less than :data:`MISREAD_MAX_SIGNIFICANCE` of
     the physical response (``significance``, (n_modes,)), and no narrower than every other
     mode whose half-power band overlaps theirs (``freq_hz``, Hz, ``damping_ratio``: a
     blend decays no slower than the slowest of the modes it stands for; a lightly damped
     mode on a broad one's flank — the paper's air cavity, ζ = 0.5 % beside the n = 6 at
-    2.9 % — is a mode of its own)."""
+    2.9 % — is a mode of its own). On a test whose FRFs show a structure symmetric about
+    its sensors (``symmetric``: its orders unmixed, so an order group's rows hold no other
+    order's leak) a mode of another family (``other_family``: the branch above it
+    contradicts every alias of its spatial order, so it is no blend of aliased orders
+    either) is a mode whatever its share: the ring's sidewall-shear n = 1 same at
+    98.32 Hz, 0.004 half-power bandwidths from the branch's n = 4 and 10 % of the physical
+    response there (docs/lsce.md, "Session 38")."""
     f, z, sig = (np.asarray(a, dtype=float) for a in (freq_hz, damping_ratio, significance))
     hw = z * f
     out = np.zeros(f.size, dtype=bool)
     for i, c in enumerate(classes):
         if c is None or c.in_order or c.aliased or c.branch is None or not sig[i] < MISREAD_MAX_SIGNIFICANCE:
+            continue
+        if symmetric and c.other_family:
             continue
         near = (np.abs(f - f[i]) <= hw + hw[i]) & (np.arange(f.size) != i)
         out[i] = bool(np.any(near)) and z[i] >= z[near].min()
@@ -109,7 +122,7 @@ def without_misreads(res, classify_modes, symmetric: bool = False):
     """
     classes = classify_modes(res)
     while True:
-        bad = np.flatnonzero(misread(classes, res.freq_hz, res.damping_ratio, res.significance))
+        bad = np.flatnonzero(misread(classes, res.freq_hz, res.damping_ratio, res.significance, symmetric))
         if bad.size == 0:  # (a mode is out of order only beside a more significant one in order)
             res, classes = _without_blends(res, classes)
             return _without_false_splits(res, classes, classify_modes) if symmetric else (res, classes)
