@@ -366,3 +366,23 @@ def test_on_a_grid_with_failed_points_a_reading_the_group_contradicts_is_read_at
     Sc[4, 0] = 0.45 * np.cos(4 * th_all) + 0.9 * np.cos(11 * th_all + 0.3)
     Sc[4, 1] = -0.5 * Sc[4, 0]
     assert classify(f, Sc, th_all, LOCS, **kw, group=np.array(ns))[4].n_spatial == 11
+
+
+def test_a_mode_read_below_the_mark_does_not_set_the_branch_step():
+    """On 20 points an opposite branch f = 150 + 0.9 n² (steps of 30–40 Hz per order near
+    n = 20, half-power bandwidths of about 20 Hz) is seen at n = 0 … 18 but for n = 3, whose
+    absence leaves the n = 17 (spatial order 3, nothing of that pattern seen below it) read
+    as n = 3, below the branch's mark; n = 19 is missed, n = 20 … 25 seen. The branch's step
+    is that of its two highest orders, 16 → 18: the orders above the gap are read as
+    20 … 25 (the out-of-order reading as the last step but one had put the step at 2 Hz per
+    order, and the n = 20 at 510 Hz was read as its alias 40, each order above one span
+    too high: the 20-point ring with an added mass, held out, session 38)."""
+    th = _grid(20)
+    orders = [n for n in range(0, 19) if n != 3] + list(range(20, 26))
+    f = [150.0 + 0.9 * n**2 for n in orders]
+    cls = classify(f, _shapes(th, [(n, -0.7) for n in orders]), th, LOCS, significance=np.full(len(f), 0.8),
+                   damping_ratio=np.full(len(f), 0.02))
+    by_f = dict(zip(orders, cls))
+    assert by_f[17].n == 3  # the unseen alias: read at its spatial order
+    assert [by_f[n].n for n in range(20, 26)] == list(range(20, 26))
+    assert all(by_f[n].aliased for n in range(20, 26))

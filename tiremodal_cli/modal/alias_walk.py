@@ -190,10 +190,19 @@ def _by_dispersion(smallest: int, n_spatial: int, f_r: float, m: BranchModes, r:
     bandwidth and the smallest stays. Only on a complete grid, as :func:`_contradicted` (with
     points missing every order leaks into every spatial reading; on the paper's failed-points
     combination the walk's new labels changed nothing found but the joint refinement's
-    proposals, 9 → 13, and the run 43 → 154 s)."""
-    if m.damping is None or not m.complete or len(marks) < 2 or marks[-1][0] <= marks[-2][0]:
+    proposals, 9 → 13, and the run 43 → 154 s). The step is the branch's two highest marked
+    orders' (session 38: a clear mode read at its own spatial order below the mark — the
+    20-point ring's opposite n = 17 at 430.7 Hz read n = 3, its alias unseen — made the last
+    two marks n = 3 and 18, a step of 1.75 Hz per order, and the n = 20 at 508.2 Hz was read
+    n = 40, every order above it one alias span too high)."""
+    if m.damping is None or not m.complete:
         return smallest
-    (n0, f0), (n1, f1) = marks[-2], marks[-1]
+    last = {}
+    for n, fq in marks:  # the highest-frequency reading of each marked order
+        last[n] = max(fq, last.get(n, fq))
+    if len(last) < 2 or max(last) != marks[-1][0]:  # the last mark below the branch's top: no step to continue
+        return smallest
+    (n0, f0), (n1, f1) = sorted(last.items())[-2:]
     slope = (f1 - f0) / (n1 - n0)
     if not slope > 0:
         return smallest
