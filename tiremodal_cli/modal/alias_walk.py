@@ -64,23 +64,26 @@ def resolve_aliases(m: BranchModes) -> tuple[list[int], set[int]]:
 
     Returns (orders, one per mode; the modes of another family — every alias of theirs
     contradicted by the branch above them, :func:`_contradicted` — which keep their spatial
-    order)."""
+    order). Two rounds over the branches: the second asks of a mode clear only in its own
+    order group that the other branch contradict its alias too, and reads that branch's
+    orders as the first round resolved them."""
     ns = [o.n_spatial for o in m.reads]
-    families: set[int] = set()
-    for br in {o.branch for o in m.reads}:
-        idx = sorted((r for r in range(len(m.reads)) if m.reads[r].branch == br), key=lambda r: m.freq_hz[r])
-        own: set[int] = set()
-        for _ in range(len(idx)):  # each pass can only add to ``own``
-            _walk_branch(m, idx, ns, own)
-            wrong = (_contradicted(m, idx, ns) - own) if m.complete else set()
-            if not wrong:
-                break
-            own |= wrong
-        families |= own
-    return ns, families
+    idx_of = {br: sorted((r for r in range(len(m.reads)) if m.reads[r].branch == br), key=lambda r: m.freq_hz[r])
+              for br in {o.branch for o in m.reads}}
+    own: dict = {br: set() for br in idx_of}
+    for second in (False, True):
+        for br, idx in idx_of.items():
+            others = [q for b, ix in idx_of.items() if b != br and b is not None for q in ix] if second else None
+            for _ in range(len(idx)):  # each pass can only add to ``own``
+                _walk_branch(m, idx, ns, own[br])
+                wrong = (_contradicted(m, idx, ns, others) - own[br]) if m.complete else set()
+                if not wrong:
+                    break
+                own[br] |= wrong
+    return ns, set().union(*own.values())
 
 
-def _contradicted(m: BranchModes, idx: list[int], ns: list[int]) -> set[int]:
+def _contradicted(m: BranchModes, idx: list[int], ns: list[int], others=None) -> set[int]:
     """The modes of one branch read as aliases that a clear mode of the branch above them
     contradicts: one more than a split pair's 5 % higher, read at its own spatial order
     (unaliased), and that order lies between the mode's spatial order and its alias —
@@ -90,19 +93,32 @@ def _contradicted(m: BranchModes, idx: list[int], ns: list[int]) -> set[int]:
     and n = 6 at 126 Hz); it keeps its spatial order. Only on a complete grid: with points
     missing every order leaks into every spatial reading (:mod:`tiremodal_cli.modal.gaps`),
     and the paper's failed-points case's n = 8 same at 147.2 Hz, read as spatial order 2, was
-    given n = 2 (its diagnosis's final fit 0.09 → 2.1 % RMS, 8 modes set aside). The mode
-    must be clear, or clear in its own order group on a test whose orders do not mix
-    (:meth:`BranchModes.clear_in_group`, session 38: the shear's n = 1 at 98.32 Hz explains
-    10 % of the physical response beside the branch's n = 4 0.015 Hz away, and was read
-    n = 33)."""
+    given n = 2 (its diagnosis's final fit 0.09 → 2.1 % RMS, 8 modes set aside).
+
+    The mode must be clear, or (``others``: the other branches' modes, resolved) clear in
+    its own order group on a test whose orders do not mix (:meth:`BranchModes.clear_in_group`)
+    with its alias contradicted on the other branch as well: a mode weak in the physical
+    FRFs has no branch reading to trust (its tread–sidewall product is mostly its
+    neighbours' misfit; ``classify._other_branch``). Session 38: the ring sidewall shear's
+    n = 1 at 98.32 Hz explains 10 % of the physical response beside the branch's n = 4
+    0.015 Hz away and was read n = 33, though neither branch can hold an order 33 there; a
+    held-out ring with sidewall coupling has a same n = 35 at 418 Hz, 2 % of its band's
+    response, read on the opposite branch, whose alias only that branch contradicts."""
     f, reads = m.freq_hz, m.reads
     out = set()
+
+    def against(r, n_s, qs):
+        return any(f[q] > 1.05 * f[r] and m.clear(q) and ns[q] == reads[q].n_spatial and n_s < ns[q] < ns[r]
+                   for q in qs)
+
     for i, r in enumerate(idx):
         n_s = reads[r].n_spatial
-        if ns[r] == n_s or not (m.clear(r) or m.clear_in_group(r)):  # a weak reading is no evidence
+        if ns[r] == n_s:
             continue
-        if any(f[q] > 1.05 * f[r] and m.clear(q) and ns[q] == reads[q].n_spatial and n_s < ns[q] < ns[r]
-               for q in idx[i + 1:]):
+        if m.clear(r):
+            if against(r, n_s, idx[i + 1:]):
+                out.add(r)
+        elif others and m.clear_in_group(r) and against(r, n_s, idx[i + 1:]) and against(r, n_s, others):
             out.add(r)
     return out
 
