@@ -679,6 +679,31 @@ ring's 20-point extensible + coupling test gains one at 723.12 Hz. Nothing else 
 Session 37: nothing moves but the ring's 36-point extensible + mass test, one surplus row
 fewer (64 → 63 adopted, every count the same).
 
+Session 38 (73c6563) on the same 24 tests, against session 37's code run again here (2da7664 on
+an Intel Xeon; session 37's rows above are the EPYC's): ring 686 → **688** / 704 found,
+mislabelled 5 → 3 (the shear + coupling's and the extensible + coupling's second-family
+n = 1 same), spurious 5 / 877 unchanged; paper 673 / 685, 8 / 870 unchanged; diagnoses 12 / 12
+and 10 / 12 with both codes on this machine.
+
+**A fresh draw** (`--held-out-seed 7000`, session 38: 24 other level combinations, looked at
+by no earlier session), session 37's code (2da7664) against session 38's (73c6563):
+
+| run | code | generator | found / expected | mislabelled | spurious / adopted | cases over 5 % | aliased read right | diagnoses right |
+|---|---|---|---|---|---|---|---|---|
+| held-out draw 7000 | 2da7664 | paper | 555 / 610 (91 %) | 7 | 9 / 751 (1.2 %) | 0 | 256 / 256 | 8 / 8 |
+| | | ring | 625 / 640 (98 %) | 5 | 18 / 830 (2.2 %) | 2 (5 / 73, 4 / 62) | 223 / 246 | 7 / 8 |
+| held-out draw 7000 | 73c6563 | paper | 555 / 610 (91 %) | 7 | 9 / 751 (1.2 %) | 0 | 256 / 256 | 8 / 8 |
+| | | ring | **626** / 640 (98 %) | **4** | 18 / 830 (2.2 %) | 2 (5 / 73, 4 / 62) | **245** / 246 | **8** / 8 |
+
+The ring's 36-point sidewall shear + Timoshenko finds its second family's n = 1; the 20-point
+cavity + mass reads its opposite orders 20 … 41 right (they were one or two alias spans too
+high) and its diagnosis turns right (`rhoA` at 98 % base RMS → `extensible_belt`,
+`air_cavity` at 0.33 → 0.29 %). The paper's 48 misses are its two 30-point sidewall membrane +
+mass tests (36 and 18 same-direction modes: docs/lsce.md, "Known limit"). The two ring tests
+over 5 % spurious have 1 s records, 2 hits and 3 % noise: every spurious row of the draw lies
+within 1.6 % of a truth mode, most within 2 σ of their own reported frequency uncertainty
+(docs/lsce.md, "Session 38").
+
 """
 
 
@@ -763,6 +788,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1306 / 1334 (98 %) | 5 / 1855 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-12-02, end of session 37 | session 36's leak copy bound and joined clusters (the matrix unchanged by them), and on mixed orders a pinned pole of its own group that moves the channels otherwise is no copy of a stronger mode (modal.own_mode), read at its group where the symmetry is broken (classify; the code of 27080b6): the sidewall coupling + mass's same n = 41 and 42 found, its n = 36 no longer mislabelled | paper | 1173 / 1182 (99 %) | 6 / 1694 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 7 min (`--jobs 2`) |
 | | | ring | **1309** / 1334 (98 %) | 5 / 1857 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-12-02, end of session 38 | a weak mode of another family, clear in its own group, keeps its spatial order and is no misread on a symmetric test (alias_walk, misreads); the alias walk's step from the branch's two highest marked orders (the code of 73c6563): the ring sidewall shear's n = 1 same at 98.32 Hz found | paper | 1173 / 1182 (99 %) | 6 / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 7 min (`--jobs 2`, other runs beside it) |
+| | | ring | **1310** / 1334 (98 %) | 5 / 1865 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
