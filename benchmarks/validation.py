@@ -433,6 +433,8 @@ generalises. Sessions 14 and 15 (records not kept; `--jobs 2`, same machine; + 3
 | | | ring | 1301 / 1334 (98 %) | 6 | 7 / 1852 (0.4 %) | 0 | 14 / 14 | 0 |
 | seeds + 2000, session 37 (as above) | 27080b6 | paper | 1166 / 1182 (99 %) | 3 | 9 / 1684 (0.5 %) | 0 | 13 / 13 | 0 |
 | | | ring | **1304** / 1334 (98 %) | 6 | 7 / 1856 (0.4 %) | 0 | 14 / 14 | 0 |
+| seeds + 1000, session 38 on an Intel Xeon (a weak mode of another family keeps its spatial order and is no misread on a symmetric test; the walk's step from the branch's two highest orders) | 73c6563 | paper | 1165 / 1182 (99 %) | 2 | 12 / 1668 (0.7 %) | 0 | 13 / 13 | 0 |
+| | | ring | **1306** / 1334 (98 %) | 3 | 12 / 1878 (0.6 %) | 0 | 14 / 14 | 0 |
 
 Session 31's rows, case by case against session 30's (6d57eb6) at the same seeds on the same
 machine: at + 1000 the ring's noise case loses a spurious row (224.82 Hz), its sidewall coupling
