@@ -16,7 +16,7 @@ from tiremodal_cli.modal.lsce import bridge, sweep, sweep_poly
 from tiremodal_cli.modal.merge import GroupMode, swap_cost
 from tiremodal_cli.modal.plscf import sweep_plscf
 from tiremodal_cli.modal.refine import dropped_poles
-from tiremodal_cli.modal.rescue import unexplained_bands, with_rescued
+from tiremodal_cli.modal.rescue import parts_kept, split_at_top, unexplained_bands, with_rescued, without_blends
 
 __all__ = ["group_modes", "group_poles"]
 
@@ -51,7 +51,14 @@ def group_modes(data: GroupData, spatial: bool, group_max: int, rescue=(), besid
     (not swept again)."""
     d = diagram or guarded_diagram(data, lambda b: group_poles(data, b, spatial, group_max))
     s0, parts, (fit, s, rej, refit) = fit_clusters(data, d.selected())
-    d2 = rescue and with_rescued(data, d, rescue, lambda dd, b, top: group_poles(dd, b, spatial, top), group_max)
+    line, poles_to = data.freq[1] - data.freq[0], lambda dd, b, top: group_poles(dd, b, spatial, top)
+    split = [] if diagram is not None else split_at_top(d, data.freq)
+    d1 = split and with_rescued(data, d, split, poles_to, group_max)
+    d1 = d1 and without_blends(d1, split, line, len(d.clusters))
+    f1 = d1 and fit_clusters(data, d1[0].selected())
+    if f1 and parts_kept(d1[1], f1[2][1], line):  # a blend of two modes the sweep to twice the order resolves
+        d, (s0, parts, (fit, s, rej, refit)) = d1[0], f1
+    d2 = rescue and with_rescued(data, d, rescue, poles_to, group_max)
     if d2:  # peaks no pole stood for (``rescue``): the sweep at twice the order found poles there
         d, (s0, parts, (fit, s, rej, refit)) = d2, fit_clusters(data, d2.selected())
     d3 = beside and fit is not None and with_beside(data, d, s0, parts, s, fit.synthesis)

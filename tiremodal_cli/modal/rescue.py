@@ -1,4 +1,5 @@
-"""A peak an order group's fit leaves unexplained: the sweep redone at twice the order.
+"""A peak an order group's fit leaves unexplained, or a blend of two modes: the sweep redone at
+twice the order.
 
 LSCE spends its poles where the impulse responses carry their energy. On a wide band (a
 5,120 Hz front end: 0.5–1,320 Hz in 0.5 Hz lines) a low mode in accelerance carries little
@@ -29,6 +30,13 @@ rest, by every rule of :mod:`~tiremodal_cli.modal.groupfit`. Not with points mis
 grid: there every group holds every mode's leaks, and its sweep already goes to the unsplit
 order.
 
+**A blend the sweep's top resolves** (:func:`split_at_top`, session 39): an adopted cluster
+that ends below the sweep's highest order, where two narrower tracks stand one on each side
+of it within its bandwidth, is one pole for two modes at the orders too low to resolve them;
+the sweep is redone at twice the order for it, and the blend set aside when that sweep gives
+exactly two narrower clusters there, one on each side (:func:`without_blends`), and the
+group's fit keeps both (:func:`parts_kept`); otherwise nothing changes.
+
 Measured on the validation matrix (session 20): the first version, without the cross-group
 condition, re-swept the 5,120 Hz ring cases' crowd at 167 Hz and a failed-points case's
 band top (found −2, spurious +1 there); with it, see docs/lsce.md ("Session 20").
@@ -46,7 +54,8 @@ from tiremodal_cli.modal.groupfit import NOISE_ALPHA
 from tiremodal_cli.modal.guard import guarded_diagram
 from tiremodal_cli.modal.lsce import poles_to_modal
 
-__all__ = ["LEVEL_LINES", "unexplained_bands", "far_bands", "rescue_clusters", "with_rescued"]
+__all__ = ["LEVEL_LINES", "far_bands", "rescue_clusters", "split_at_top", "unexplained_bands", "with_rescued",
+           "without_blends", "parts_kept"]
 
 #: lines of the running median that gives the residual's local noise level (s18 measured
 #: on the matrix's residuals: with a 101-line running median, 0.22 % of the lines exceed
@@ -138,3 +147,82 @@ def with_rescued(data, diagram, bands, sweep, group_max: int):
     if not extra:
         return None  # (their poles join the diagram's: its plot shows where they came from)
     return replace(diagram, clusters=diagram.clusters + extra, poles=diagram.poles + [m for c in extra for m in c.members])
+
+
+def split_at_top(diagram, freq) -> list:
+    """The adopted clusters the sweep's highest order resolves into two modes: bands (Hz, (lo,
+    hi)) one half-power bandwidth about each, for :func:`with_rescued`.
+
+    Two modes within a bandwidth or two of each other give LSCE one broad pole at the model
+    orders too low to resolve them (the ring's 36-point sidewall shear, 1 s records: the
+    branch's n = 4 at 90.36 Hz and the second family's n = 4 at 98.32 Hz, one pole at 95.45 Hz
+    with ζ 4.8 % stable over orders 9–22), and two from a higher order on, still converging
+    at the sweep's top (order 30: 90.1 and 98.4 Hz, ζ 3.4 and 2.7 %, against 2 % for the
+    group's other modes). The signature, read from the diagram alone: an adopted cluster
+    with no member at the highest order, where two poles narrower than it (0 < ζ' < ζ) lie one
+    on each side of it, more than a line from it and within its bandwidth 2ζf, neither of them
+    a member of an adopted cluster (a mode found already is a neighbour, not a part). A blend
+    is broader than either of its parts and lies between them; the sweep has not converged
+    there, and is redone at twice the order (as :func:`with_rescued`). Only a cluster whose
+    bandwidth lies inside the analysis band (``freq``, (K,) Hz): at the band's edges a mode
+    is fitted to one flank, and the sweep's poles there wander with the edge."""
+    line_hz = freq[1] - freq[0]
+    if not diagram.poles:
+        return []
+    top = max(p.order for p in diagram.poles)
+    found = {id(m) for c in diagram.selected() for m in c.members}  # poles of modes already found
+    at_top = [p for p in diagram.poles
+              if p.order == top and p.damping_ratio > 0 and p.status != "new" and id(p) not in found]
+    out = []
+    for c in diagram.selected():
+        if top in c.orders or c.std_hz is not None:
+            continue
+        f, z = c.freq_hz, c.damping_ratio
+        if f - 2 * z * f < freq[0] or f + 2 * z * f > freq[-1]:
+            continue
+        narrow = [p.freq_hz for p in at_top if p.damping_ratio < z and abs(p.freq_hz - f) <= 2 * z * f]
+        if any(g < f - line_hz for g in narrow) and any(g > f + line_hz for g in narrow):
+            out.append((f - 2 * z * f, f + 2 * z * f))
+    return out
+
+
+def without_blends(diagram, bands, line_hz: float, first_new: int):
+    """``diagram`` with each adopted cluster of :func:`split_at_top`'s ``bands`` set aside
+    where the rescued clusters (``diagram.clusters[first_new:]``) resolve it: two of them in
+    the band, no more (a blend of two modes is two; where the higher order fills the band with
+    more — a crowd, another group's leaks, the noise — it resolves no blend), narrower than
+    it, one on each side of it more than a line off. Of the rescued clusters only those of
+    the bands so resolved are kept (a band the higher order does not resolve stays as it was). Returns (diagram, [(the blend's frequency (Hz), its parts'
+    representative poles (rad/s))]), or None when none is set aside."""
+    old, new = diagram.clusters[:first_new], diagram.clusters[first_new:]
+    selected = [c for c in old if c.adopted]
+    keep, resolved, aside = [], [], {}
+    for lo, hi in bands:
+        mid = 0.5 * (lo + hi)
+        blend = min(selected, key=lambda c: abs(c.freq_hz - mid))
+        parts = sorted((c for c in new if c.adopted and lo <= c.freq_hz <= hi), key=lambda c: c.freq_hz)
+        if (len(parts) == 2 and all(c.damping_ratio < blend.damping_ratio for c in parts)
+                and parts[0].freq_hz < blend.freq_hz - line_hz < blend.freq_hz + line_hz < parts[1].freq_hz):
+            aside[id(blend)] = replace(blend, adopted=False, reason=(
+                f"{blend.reason}; a blend of two modes: the sweep to twice the order resolves it into poles on "
+                f"either side of it"))  # a copy: the diagram given stays as it was
+            keep += [c for c in parts if c not in keep]
+            resolved.append((blend.freq_hz, [c.representative.s for c in parts]))
+    if not resolved:
+        return None
+    kept = {id(m) for c in keep for m in c.members}
+    dropped = {id(m) for c in new if c not in keep for m in c.members}
+    return replace(diagram, clusters=[aside.get(id(c), c) for c in old] + keep,
+                   poles=[p for p in diagram.poles if id(p) not in dropped or id(p) in kept]), resolved
+
+
+def parts_kept(resolved, kept_poles, line_hz: float) -> bool:
+    """Whether the group's fit keeps, of every blend :func:`without_blends` set aside, a part
+    on each side of it (a part the fit drops — no peak, under the noise — was no mode, and
+    the blend stands)."""
+    kept = {complex(p) for p in np.atleast_1d(kept_poles)}
+    for f_blend, parts in resolved:
+        f = poles_to_modal(np.array([p for p in parts if complex(p) in kept], dtype=complex))[0]
+        if not (np.any(f < f_blend - line_hz) and np.any(f > f_blend + line_hz)):
+            return False
+    return True
