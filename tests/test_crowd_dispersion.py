@@ -181,3 +181,25 @@ def test_an_in_phase_row_above_the_anti_phase_branch_is_not_on_its_branch(ring_s
     out = crowds(f + [1323.3], [0.02] * (len(f) + 1), ns + [25], n_sp + [1], br + ["same"], [True] * (len(f) + 1), N)
     assert 29 in base[19] and 29 in out[19]
     assert [bool(c) for c in out[:len(f)]] == [bool(c) for c in base]
+
+
+def test_a_pole_broadened_by_its_alias_s_flank_is_no_crowd_by_its_own_damping(ring_same):
+    """34 points, the ring's in-phase branch n = 0 … 17 (ζ = 0.02, every mode clear). By the
+    truth n = 11 (159.41 Hz) is no crowd: its alias 34 − 11 = 23 lies 7.06 Hz above it,
+    outside 2ζf = 6.38 Hz, and n = 12 is one (its alias 22 lies 5.19 Hz off, inside 6.45 Hz).
+    The matrix's 5 % noise test estimated n = 11 at ζ = 0.0224 — a pole partly blending the
+    flank of a neighbour it does not resolve is broader than the mode — which put the
+    extrapolated n = 23 inside 2ζf. The test's bandwidth takes the lesser of the mode's
+    damping and the median over its branch's clear modes: n = 11 stays no crowd at ζ =
+    0.0224, and n = 12 stays a crowd at the same inflated damping."""
+    from tiremodal_cli.modal.crowds import crowds
+    N = 34
+    assert ring_same[23] - ring_same[11] > 2 * 0.02 * ring_same[11]
+    assert ring_same[22] - ring_same[12] < 2 * 0.02 * ring_same[12]
+    ns = list(range(18))
+    f = [ring_same[n] for n in ns]
+    z = [0.02] * 18
+    z[11] = z[12] = 0.0224
+    out = crowds(f, z, ns, ns, ["same"] * 18, [True] * 18, N)
+    assert out[11] == ()
+    assert out[12] == (12, 22)

@@ -216,7 +216,7 @@ def _seen_at(f_c: float, f_r: float, f, z, same) -> float:
 def crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=None):
     """Modes whose order cannot be told: other orders that alias onto the same spatial
     order (n' ≡ ±n_s mod N) lie, by their branch's dispersion, within one half-power
-    bandwidth 2ζf of the mode.
+    bandwidth 2ζf of the mode (ζ: below).
 
     The branch's dispersion f(n) is the frequencies of the modes ``clear`` (both confidences
     ≥ 0.5; :func:`classify` leaves out a mode read as an alias that falls out of its branch's
@@ -233,7 +233,11 @@ def crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=
     this mode, is order c's pole (not when it is the other member of this mode's split pair,
     ``pair``: one order twice), and c's mode lies there, not at the extrapolated f(c) (the
     ring's n = 11 same at 159.4 Hz: its alias n = 23 extrapolated to 165.8 Hz, inside the
-    6.4 Hz band, found at 166.8 Hz, outside it). Returns, per
+    6.4 Hz band, found at 166.8 Hz, outside it). The bandwidth is 2ζf with ζ the lesser of the
+    mode's own damping and the median over its branch's clear modes (session 39): a pole
+    that partly blends the flank of a neighbour it does not resolve is broader than the mode
+    (the ring's n = 11 at 5 % noise: ζ 0.0224, not 0.020; its alias n = 23, 7.06 Hz off by
+    the truth, fell inside 2ζf = 7.1 Hz, not 6.4 Hz). Returns, per
     mode, the sorted candidate orders (the mode's own included) when it is in a crowd, else ().
     """
     k = len(freq_hz)
@@ -249,12 +253,13 @@ def crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=
         if f_of is None:
             continue
         n_hi = candidate_limit(n_points, max(on))
+        z_one = float(np.median([z[r] for r in range(k) if branch[r] == br and clear[r]]))
 
         for r in range(k):
             if branch[r] != br:
                 continue
             alias = _alias_class(n_spatial[r], n_points, n_hi)
-            bw = 2 * z[r] * f[r]
+            bw = 2 * min(z[r], z_one) * f[r]
             others = [q for q in range(k) if q != r and branch[q] == br]
             same = [q for q in others if n_spatial[q] in alias
                     and (pair is None or pair[q] is None or pair[q] != pair[r])]
