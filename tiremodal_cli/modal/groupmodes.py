@@ -38,7 +38,8 @@ def group_poles(data: GroupData, b, spatial: bool, group_max: int) -> list:
     return sweep(b, range(2, group_max + 1), skip=opt.skip)
 
 
-def group_modes(data: GroupData, spatial: bool, group_max: int, rescue=(), beside: bool = False, diagram=None):
+def group_modes(data: GroupData, spatial: bool, group_max: int, rescue=(), beside: bool = False, diagram=None,
+                split: bool = False):
     """One order group: its stabilization diagram, its modes (GroupMode), the poles dropped
     after LSFD, its synthesis in the physical FRFs, (with ``opt.refine``; else None) what
     :func:`_refine_adopted` needs: (data, kept poles, their participation, the fit's
@@ -48,11 +49,13 @@ def group_modes(data: GroupData, spatial: bool, group_max: int, rescue=(), besid
     ``rescue`` (bands, Hz): the sweep redone at twice the order adds its clusters there.
     ``beside``: poles the group's residual asks for beside its kept ones added
     (:mod:`~tiremodal_cli.modal.beside`); ``diagram``: the group's diagram of an earlier call
-    (not swept again)."""
+    (not swept again). ``split``: a blend the sweep's top resolves swept again
+    (:func:`~tiremodal_cli.modal.rescue.split_at_top`; not on a grid with points missing, where
+    every group holds every mode's leaks, as for ``rescue``)."""
     d = diagram or guarded_diagram(data, lambda b: group_poles(data, b, spatial, group_max))
     s0, parts, (fit, s, rej, refit) = fit_clusters(data, d.selected())
     line, poles_to = data.freq[1] - data.freq[0], lambda dd, b, top: group_poles(dd, b, spatial, top)
-    split = [] if diagram is not None else split_at_top(d, data.freq)
+    split = split_at_top(d, data.freq) if split and diagram is None else []
     d1 = split and with_rescued(data, d, split, poles_to, group_max)
     d1 = d1 and without_blends(d1, split, line, len(d.clusters))
     f1 = d1 and fit_clusters(data, d1[0].selected())

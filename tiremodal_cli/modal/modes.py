@@ -186,14 +186,14 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
         data = GroupData(band.freq, rows, back, band.flat, "accelerance", opt, g, rows.shape[0] // band.Hb.shape[0],
                          band.Hb.shape[0])
-        out[g] = (data, group_modes(data, spatial, group_max))
+        out[g] = (data, group_modes(data, spatial, group_max, split=not gaps))
         if progress:
             progress(i + 1, len(groups))
     every = [(m.pole, h) for h, (_, r) in out.items() for m in r[1]]
     for g, (data, r) in out.items():  # peaks no pole of any group stands for (modal.rescue)
         far = far_bands(r[5], [p for p, _ in every], band.freq[1] - band.freq[0], [h for _, h in every],
                         2 if orthogonal else 1, own=g) if not gaps else []
-        out[g] = (data, group_modes(data, spatial, group_max, far)) if far else out[g]
+        out[g] = (data, group_modes(data, spatial, group_max, far, split=True)) if far else out[g]
     mixing = (order_mixing(band.freq, {g: d.rows for g, (d, _) in out.items()},
                            [(m.group, m.pole, m.significance) for _, r in out.values() for m in r[1]], channel_angle)
               if orthogonal and not gaps else None)
