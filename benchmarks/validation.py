@@ -792,6 +792,10 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | **1309** / 1334 (98 %) | 5 / 1857 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-12-02, end of session 38 | a weak mode of another family, clear in its own group, keeps its spatial order and is no misread on a symmetric test (alias_walk, misreads); the alias walk's step from the branch's two highest marked orders (the code of 73c6563): the ring sidewall shear's n = 1 same at 98.32 Hz found | paper | 1173 / 1182 (99 %) | 6 / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 7 min (`--jobs 2`, other runs beside it) |
 | | | ring | **1310** / 1334 (98 %) | 5 / 1865 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-12-02, session 39, on an AMD EPYC: session 38's end run again | the code of e84e7d0 | paper | 1173 / 1182 (99 %) | 6 / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 6 min (`--jobs 2`) |
+| | | ring | 1310 / 1334 (98 %) | 5 / 1863 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-12-02, end of session 39 | a cluster the sweep's top order splits into two narrower tracks re-swept at twice the order and set aside where exactly two parts resolve it (modal.rescue); not on grids with points missing; the crowd test's bandwidth from the lesser of the mode's and its branch's damping (crowds; the code of 7f32514): the ring 5 % noise test's n = 11 same no longer a crowd | paper | 1173 / 1182 (99 %) | 6 / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 7 min (`--jobs 2`, counting beside it) |
+| | | ring | **1311** / 1334 (98 %) | 5 / 1863 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
