@@ -706,6 +706,17 @@ over 5 % spurious have 1 s records, 2 hits and 3 % noise: every spurious row of 
 within 1.6 % of a truth mode, most within 2 σ of their own reported frequency uncertainty
 (docs/lsce.md, "Session 38").
 
+**Session 39** (docs/lsce.md, "Session 39": a blend the sweep's top resolves; a crowd's
+bandwidth from one mode's damping). The fresh draw (seed 7000), e84e7d0 against 38dbdcf:
+ring 626 → **630** / 640 found, mislabelled 4 → **1**, spurious 18 → 17 / 832; paper
+unchanged at 555 / 610, 7 mislabelled, spurious 9 → 8 / 751; aliased read right 245 / 246;
+the same three ring tests over 5 % spurious (4 / 74, 4 / 62, 4 / 77) with both codes. The
+held-out levels (seed 5000), the same two codes: ring 688 → **689** / 704, spurious 6 → 5;
+paper unchanged at 673 / 685, 8 / 873; diagnoses 12 / 12 and 11 / 12 with both. The last two
+conditions of the blend test (7f32514: the parts' half-power bands overlap the blend's; no
+blend test on a grid with points missing) change no matrix count and none at seeds + 1000;
+the two held-out draws were not rerun with them.
+
 """
 
 
