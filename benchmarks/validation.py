@@ -715,7 +715,8 @@ held-out levels (seed 5000), the same two codes: ring 688 → **689** / 704, spu
 paper unchanged at 673 / 685, 8 / 873; diagnoses 12 / 12 and 11 / 12 with both. The last two
 conditions of the blend test (7f32514: the parts' half-power bands overlap the blend's; no
 blend test on a grid with points missing) change no matrix count and none at seeds + 1000;
-the two held-out draws were not rerun with them.
+the draw 7000 at d77c049 gives the same counts (ring 630 / 640, 1, 17 / 831; paper 555 / 610,
+7, 8 / 751; aliased 245 / 246 and 256 / 256).
 
 """
 
