@@ -241,6 +241,7 @@ def test_ctrl_c_is_raised_between_results_not_inside_the_callers_work():
     assert signal.getsignal(signal.SIGINT) is before
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_dask_gives_the_same_summary(tmp_path, campaign):
     distributed = pytest.importorskip("distributed")
     root, tree, out, res0 = campaign
@@ -326,6 +327,7 @@ def test_second_batch_on_one_outdir_is_refused(tmp_path):
             run_batch([tmp_path / "a"], out)
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_workers_die_with_a_killed_parent_and_hold_the_lock_until_then(tmp_path, campaign):
     """SIGKILL of the batch process alone (not its group): its forkserver and workers end
     within a second, install nothing after, and a new batch is refused only while they live."""

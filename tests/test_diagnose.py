@@ -109,6 +109,7 @@ def test_undeclared_effect_is_found_and_closes_the_loop(name, no_effect):
         assert got[f"{name}.{main}"] == pytest.approx(EFFECT_CASES[name][main], rel=0.10)
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_added_mass_split_pairs_found_and_the_mass_named():
     d = diagnose(pipeline_rows({"added_mass": {"m_a": 1.0, "theta_a": 0.5}}), NOMINAL, n_points=34)
     pairs = d.residual_before["pattern"]["split_pairs"]
@@ -118,6 +119,7 @@ def test_added_mass_split_pairs_found_and_the_mass_named():
     assert 0.5 < m_a < 2.0
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_no_false_alarm_on_the_seed_model(no_effect):
     """Seed model with noise, 10 seeds: nothing adopted in at least 9."""
     adopted = [no_effect.adopted] + [diagnose(pipeline_rows({}, seed=s), NOMINAL, n_points=34).adopted

@@ -98,6 +98,7 @@ def test_the_rising_rule_names_only_the_proposals_of_a_falling_pair():
     assert _falling(prob, np.concatenate([found, [p.pole for p in props]]), np.arange(3), props) == set()
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_a_crowd_frees_the_found_mode_its_response_biased():
     """A flat stretch of the branch, f(n) = 300 + 3 n Hz (ζ = 3 %): orders 11 and 13 (one
     aliased group on 24 points) lie within a bandwidth of each other and are both unfound — a

@@ -256,6 +256,7 @@ def test_poly_reference_resolves_a_repeated_root():
     assert np.min(np.abs(op.s - s[2])) < 1e-6 * abs(s[2])
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_added_mass_split_pairs_resolved_by_poly_reference():
     """A 1 kg mass at 30° splits the cos/sin pairs; with a second tread sensor at 50° the
     poly-reference sweep (cos and sin as references) reports both members of every pair
@@ -301,6 +302,7 @@ def _permuted(r, idx):
                                point_index=r.point_index[idx], point_angle=r.point_angle[idx])
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_modes_do_not_depend_on_how_points_are_stored():
     """A test rolled by ten points, and one stored in decreasing angle, give the same modes
     (frequency, n, branch, confidences) as the original on the default band, and each
@@ -439,6 +441,7 @@ def test_method_both_marks_confirmed_modes(tmp_path):
         assert abs(modes[k]["frequency_hz"] / ref - 1) < 1e-3 and modes[k]["confirmed"] is True, (ref, modes[k])
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_poly_reference_orders_in_threads_give_the_same_poles_and_table(exact_sim):
     """The model orders solved in worker threads (issue 19) are each computed as alone: the
     poles, participation factors and the whole modal table equal the one-thread ones."""

@@ -62,6 +62,7 @@ def test_a_weak_mode_that_moves_the_channels_otherwise_is_a_mode(seed):
         assert abs(res.freq_hz[k] / want - 1) < 1e-3
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_strong_modes_copies_stay_one_mode(seed):
     """The strong mode alone, each point's FRF 1 % in error (copies of it in every group,

@@ -82,6 +82,7 @@ def ring_rim_5120(tmp_path_factory):
     return sim.truth["modes"], freqs
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_the_rim_mode_at_the_foot_is_found_within_the_ruler_by_default(ring_rim_5120):
     """The generator's n = 1 rim mode (24.45 Hz, 19 Hz above the band's foot, its group's
     1,211 Hz pole 4.2 of that pole's half-widths away across the wrap) is in the table

@@ -86,6 +86,7 @@ def ring_rim(tmp_path_factory):
     return rec, rejected, modes, read_modes(folder / "run" / "modes.csv")
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_leaks_dropped_are_no_modes_of_the_tyre(ring_rim):
     """The poles the rule drops on the ring with a free rim are more than 0.3 % from every
     truth mode of the generator (it drops some: on main the weak pole at 478.75 Hz in

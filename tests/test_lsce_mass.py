@@ -67,6 +67,7 @@ def ring_mass(tmp_path_factory):
     return rec, rejected, simulate(config_for(case)).truth["modes"], read_modes(folder / "run" / "modes.csv")
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_an_added_masss_leaks_are_dropped_and_no_mode_lost(ring_mass):
     """With the added mass, no mode the ruler expects (``detail``) within 0.3 % of a pole the
     leak rules drop is missed or mislabelled (a pole there is a copy read in another order;
@@ -94,6 +95,7 @@ def coupling_mass(tmp_path_factory):
     return run_case(case, tmp_path_factory.mktemp("coupling_mass"))
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 @pytest.mark.parametrize("n", [36, 41, 42])
 def test_a_weak_mode_on_mixed_orders_is_not_taken_for_a_stronger_modes_copy(coupling_mass, n):
     """Session 37: the generator's (FE ring's) same-direction n = 41 (479.23 Hz) and 42

@@ -117,6 +117,7 @@ def ring_5120_rim(tmp_path_factory):
     return rim, default, without
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_the_rim_mode_the_default_sweep_missed_is_found(ring_5120_rim):
     """The generator's rim n = 1 at 24.45 Hz (its peak 1,184 × the noise floor; the band
     0.5–1,320 Hz) got no pole up to order 30 of its group's sweep (main at f848314: no row

@@ -102,6 +102,7 @@ def sidewall_membrane(tmp_path_factory):
     return run_case(case, tmp_path_factory.mktemp("sidewall_membrane"))
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_weak_modes_in_a_stronger_modes_band_are_found(sidewall_membrane):
     """The same-direction n = 26 and 27 (219.3 and 222.9 Hz, 34 points: aliased) explain 4 %
     of the response, 8–10 Hz from an opposite mode 26 × stronger in their order group:
@@ -165,6 +166,7 @@ def sidewall_coupling(tmp_path_factory):
     return run_case(case, tmp_path_factory.mktemp("sidewall_coupling"))
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_broad_weak_modes_pinned_within_their_bandwidth_are_found(sidewall_coupling):
     """The ring's sidewall same-direction n = 62 and 63 (699.8 and 710.4 Hz, 34 points:
     aliased, ζ ≈ 2 %, 1–3 % of the response) stand 3.0–3.2 × their group's residual RMS and

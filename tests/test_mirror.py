@@ -62,6 +62,7 @@ def test_an_asymmetric_tyre_keeps_its_gaps():
     assert "differ" in info["reason"]
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_failed_points_read_from_their_mirrors_give_every_expected_mode(failed_points_case):
     """Five of the 24 points of the one-hit 2 % noise Timoshenko + rim test missing, each
     with its mirror measured: the modal stage finds every expected truth mode of the full

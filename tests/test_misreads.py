@@ -166,6 +166,7 @@ def test_a_split_pair_on_a_symmetric_structure_loses_its_weaker_broader_member(s
         assert classes[1].pair is not None and classes[1].pair == classes[2].pair
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_the_added_masss_blends_are_not_adopted(tmp_path):
     """The paper's point mass (0.5 kg): its order groups' blends at 170–183 Hz (6 of 50
     adopted until session 14, none within 0.3 % of a truth mode) are gone, dropped as
@@ -182,6 +183,7 @@ def test_the_added_masss_blends_are_not_adopted(tmp_path):
     assert len(blends) >= 6 and all(np.min(np.abs(truth / f - 1)) > TOLERANCE for f in blends)
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_the_ring_sidewall_shears_weak_n1_is_read_as_n1(tmp_path):
     """The finite-element ring with sidewall shear (its truth, not the estimator's model):
     a second same-direction n = 1 at 98.32 Hz, 0.015 Hz from the branch's n = 4 and 10 % of

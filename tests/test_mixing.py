@@ -71,6 +71,7 @@ def _ring(masses):
     return modal_table_from_frf(r, ModalOptions(band_hz=(20.0, 400.0)))[1]
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 @pytest.mark.parametrize("masses, mixed", [((), False), (((0.0, 0.5),), True)])
 def test_a_mass_on_the_sensors_plane_mixes_the_orders(masses, mixed):
     """The finite-element ring, its sensors at 0°: without a mass the orders do not mix

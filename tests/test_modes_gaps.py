@@ -92,6 +92,7 @@ def gappy():
     return s.truth, table, res
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_modes_of_a_test_with_failed_points(gappy):
     """Every same n ≤ 7 and opposite n = 4 … 8 mode in the band found once within 0.3 %
     with its n and branch (no copy seen through the gaps in another order group is

@@ -45,6 +45,7 @@ def test_run_shows_its_stages_on_a_terminal_and_nothing_with_q(meas, tmp_path, m
     assert "\r" not in piped.stderr and piped.stderr.splitlines() == [f"wrote {tmp_path / 'c'}/: {', '.join(OUTPUTS)}, {MANIFEST}"]
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_v_speaks_for_tiremodal_not_for_other_libraries(meas, tmp_path, monkeypatch, caplog):
     """-v: tiremodal's INFO messages (the stages) are emitted, without it they are not; other
     libraries' INFO and DEBUG stay off even with -vv (their warnings only)."""

@@ -18,6 +18,7 @@ def records(tmp_path_factory):
             (("timoshenko", 43), ("added_mass", 46))}
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_a_mode_at_the_band_top_is_found_within_the_tolerance(records):
     """The paper's Timoshenko tyre, band 30–800 Hz: the opposite n = 41 mode at 772.82 Hz
     (1.3 half-power half-widths below the band's top) was estimated at 770.24 Hz (−0.33 %,

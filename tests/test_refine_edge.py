@@ -43,6 +43,7 @@ def _ring_frfs(seed: int):
     return f, H, theta
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
 def test_the_band_top_mode_is_found_and_nothing_beside_it(seed):
     """n = 6 (582 Hz) is reported within 0.3 % in its order group, and no row stands

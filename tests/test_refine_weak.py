@@ -86,6 +86,7 @@ def membrane(tmp_path_factory):
     return run_case(case, tmp_path_factory.mktemp("membrane"))
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_weak_mode_of_a_group_that_dropped_nothing_is_found(membrane):
     """The same-direction n = 45 (297.96 Hz) beside its group 11's opposite n = 11 (285.49 Hz,
     70 × stronger): LSCE put it at 298.91 Hz (+0.32 %, spurious) and its group's fit drops no
@@ -119,6 +120,7 @@ def membrane_cavity(tmp_path_factory):
     return run_case(case, tmp_path_factory.mktemp("membrane_cavity"))
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_weak_mode_biased_by_its_groups_dropped_alias_is_found(membrane_cavity):
     """The same-direction n = 47 (307.09 Hz), estimated 0.43 % low (305.77 Hz: spurious) in
     its order group 13, whose n = 55 (344.67 Hz) the fit drops as weak: refined with that

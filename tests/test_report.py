@@ -173,6 +173,7 @@ def test_predictions_reach_beyond_the_measured_orders(sample_run):
     assert max(p["n"] for p in d["predictions"]["augmented"]) == max(12, n_meas + 2)
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_batch_index_links_every_report(tmp_path):
     tree = tmp_path / "tree"
     simulate_campaign(tree, [7e5, 9e5], seed=7)

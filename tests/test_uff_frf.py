@@ -106,6 +106,7 @@ def _modes(folder):
         return list(csv.DictReader(f))
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_testlab_uff_gives_the_same_modes_and_fit(uff_runs):
     """Same modes: every mode of the time-data run is found again with its frequency within
     1e-6 and damping within 1e-4 (relative) and the same n and branch; no other mode
