@@ -96,6 +96,7 @@ def test_the_rim_mode_at_the_foot_is_found_within_the_ruler_by_default(ring_rim_
     assert np.min(np.abs(plain / f_true - 1)) > 0.003
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_no_truth_mode_found_without_the_guard_is_lost_by_default(ring_rim_5120):
     """Only the wrap-biased pole is re-estimated: every generator truth mode in the band that
     the unguarded table finds within 0.3 % the default table finds within 0.3 % too, and the

@@ -103,6 +103,7 @@ def test_leaks_dropped_are_no_modes_of_the_tyre(ring_rim):
     assert rec["found"] >= 0.9 * rec["expected"]
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_a_free_rims_n1_modes_are_read_as_n1_not_as_aliases(ring_rim):
     """A free rim adds a mode to the tyre's n = 1 modes (the generator's two "rim" modes of
     the ring on its fixture, 24.4 and 78.9 Hz, both below the n = 0 mode): each is read as

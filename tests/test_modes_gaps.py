@@ -151,6 +151,7 @@ def test_found_modes_are_read_out_of_the_leaks():
     assert np.linalg.norm(plain[5][0] - truth[ks].reshape(len(ks) * 2, -1)) > 0.1 * np.linalg.norm(truth[ks])
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_overlapping_modes_of_a_test_with_failed_points(gappy):
     """With the found modes read out of the leaks, the same branch's n ≤ 11 and the
     opposite n = 2 … 8 are found within 0.3 % with their n and branch (with the leaks

@@ -31,6 +31,7 @@ def test_a_mode_at_the_band_top_is_found_within_the_tolerance(records):
     assert not [f for f in r["spurious_hz"] if 760 < f < 800]
 
 
+@pytest.mark.slow  # 15-110 s: a whole test through the modal stage; run with `pytest -m slow` (README)
 def test_the_added_mass_diagnosis_is_unchanged(records):
     """The paper's added-mass tyre: the refinement, applied only near the band's edges, does
     not move the split pairs of the band's middle, and the diagnosis stays right."""
