@@ -718,6 +718,15 @@ blend test on a grid with points missing) change no matrix count and none at see
 the draw 7000 at d77c049 gives the same counts (ring 630 / 640, 1, 17 / 831; paper 555 / 610,
 7, 8 / 751; aliased 245 / 246 and 256 / 256).
 
+**Session 42** (347d378, the code of 7f32514; an Intel Xeon). The held-out levels (seed 5000),
+not run at this code before: paper 673 / 685, 2 mislabelled, 8 / 870 spurious, diagnoses
+12 / 12; ring **691** / 704, 1 mislabelled, **4** / 878, diagnoses **10** / 12 (38dbdcf on
+the EPYC: 689, 5, 11 / 12). The two wrong ring diagnoses are the 36-point sidewall shear +
+coupling (sidewall_membrane and extensible_belt adopted) and the 20-point extensible +
+coupling (air_cavity beside its two effects, as d2003f2 and 01f9ada read it on the EPYC in
+session 35). Cases over 5 % spurious: none. Tests at levels outside both draws (odd point
+counts, 0.5 s and 8 s records, 10 % noise, 8 hits, 8,192 Hz): docs/lsce.md, "Session 42".
+
 """
 
 
