@@ -160,7 +160,8 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     if opt.refine:  # the poles near the band's edges (docs/lsce.md, "Pole refinement"); the physical
         # check where a group's rows are not its orders' whole data (docs/lsce.md, "Session 33")
         modes, unlocated = refine_adopted(modes, {g: k for g, k in kept.items() if k is not None},
-                                          None if ortho and not gaps else synth)
+                                          None if ortho and not gaps else synth,
+                                          complete=ortho and not gaps and not (mixing and mixing["mixed"]))
         rejected += unlocated
     modes, edge = off_edges(modes, band.freq[0], band.freq[-1], exp_tau_s)
     if not modes:

@@ -37,7 +37,8 @@ class ModalOptions:
               modes by up to 0.9 %; in the band's middle, where an added mass mixes the
               orders, the group's rows are no complete model and refining there moved
               right modes off), and the weak poles (kept by the own-peak rule) with
-              their group's dropped poles held in the basis (session 12)
+              their group's dropped poles held in the basis (session 12); where the groups are a
+              complete model, the strong poles alone in their window too (session 42)
     guard : re-estimate the poles the band's wrap biases (within 6 half-widths of another
               pole's image across the wrap) in a second sweep with a guard band after the
               band's top, each kept where the group's rows fit better (:mod:`.guard`); every

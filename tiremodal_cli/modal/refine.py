@@ -44,7 +44,12 @@ are not the whole data of its orders (an added mass mixes them, points are missi
 pole is kept only where it also fits the physical FRFs better (every adopted pole near it in
 the basis, and for a weak pole every group's dropped poles, a free residue per FRF). Since
 session 33 the modal stage refines before its edge check (:func:`~tiremodal_cli.modal.merge.off_edges`
-judges the refined pole), and an edge pole the FRFs do not locate is dropped.
+judges the refined pole), and an edge pole the FRFs do not locate is dropped. Since session 42,
+where the groups are a complete model (``complete``: a full grid symmetric about its sensors,
+orders unmixed) a strong pole alone in its window (:func:`_alone`; no dropped pole of its group
+there) is refined too, kept where the refined window is at the noise (:func:`_window_at_noise`):
+LSCE's fit of noisy impulse responses is biased where a mode spans 1–2 lines in its half-width
+(docs/lsce.md, "Session 42": the 1 s held-out ring's n = 2 and 3, 0.3–0.5 % off, to 0.02 %).
 
 References
 ----------
@@ -159,7 +164,7 @@ def _noise_only(fun, x, m, lower, upper, dof, n_lines) -> np.ndarray:
     return out
 
 
-def _refine_set(freq, rows, weight, s, s_orig, L, idx, q):
+def _refine_set(freq, rows, weight, s, s_orig, L, idx, q, at_noise=False):
     """Refine the poles ``idx`` of ``s`` (in their box about ``s_orig``); returns the new
     poles (all) or None, and which of ``idx`` the window does not locate: ended on their
     box's edge, or (near the band's top) explain no more than the noise (:func:`_noise_only`)."""
@@ -195,11 +200,19 @@ def _refine_set(freq, rows, weight, s, s_orig, L, idx, q):
         return None, at
     if beyond:
         at = _noise_only(fun, sol.x, m, lower, upper, 2 * rows.shape[0] + 2, freq.size)
-    if 2 * sol.cost >= float(r0 @ r0):
+    if 2 * sol.cost >= float(r0 @ r0) or (at_noise and not _window_at_noise(sol.cost, Yc.shape, m, n_ref, use.size)):
         return None, at
     out = s.copy()
     out[use] = moved_poles(sol.x[:2 * m], s_use, np.arange(m))
     return out, at
+
+
+def _window_at_noise(cost, shape, m, n_ref, n_poles) -> bool:
+    """Whether a refined window's weighted residual (``cost``, half its sum of squares over
+    ``shape`` (n_ref K_w, n_c) entries of unit noise variance) is the noise's: 4 cost under the
+    1 − NOISE_ALPHA quantile of χ² with 2 n_ref K_w n_c less the fitted parameters' dof."""
+    dof = 2 * shape[0] * shape[1] - shape[1] * (2 * n_poles + 2 * n_ref) - 2 * m
+    return dof > 0 and 4 * cost <= scipy.special.chdtri(dof, NOISE_ALPHA)
 
 
 def refine_poles(freq, rows, synthesis, s, L=None, *, form="accelerance", free=None):
@@ -225,7 +238,7 @@ def refine_poles(freq, rows, synthesis, s, L=None, *, form="accelerance", free=N
     return _refine(freq, rows, synthesis, s, L, form, free)[0]
 
 
-def _refine(freq, rows, synthesis, s, L, form, free):
+def _refine(freq, rows, synthesis, s, L, form, free, at_noise=False):
     """:func:`refine_poles`, and which free poles their set's last attempt did not locate
     (bool (m,), :func:`_refine_set`)."""
     s = np.asarray(s, dtype=complex)
@@ -246,7 +259,7 @@ def _refine(freq, rows, synthesis, s, L, form, free):
         return s, unlocated
     sets = [idx_free[i] for i in overlapping_sets(fn[idx_free], zeta[idx_free] * fn[idx_free])]
     for idx in [i for _ in range(PASSES) for i in sets]:
-        new, unlocated[idx] = _refine_set(freq, rows, weight, out, s, L, idx, q)
+        new, unlocated[idx] = _refine_set(freq, rows, weight, out, s, L, idx, q, at_noise)
         if new is None:
             continue
         f_new = poles_to_modal(new)[0]
@@ -275,7 +288,7 @@ def dropped_poles(s0, P, kept, freq) -> tuple:
     return np.asarray(s0, dtype=complex)[take], (None if P is None else np.asarray(P)[np.array(take, dtype=int)])
 
 
-def _refine_group(modes, mine, data, s, L, synth_g, s_rej, L_rej):
+def _refine_group(modes, mine, data, s, L, synth_g, s_rej, L_rej, alone=None):
     """One group's poles refined: those near a band edge as :func:`refine_poles` does, then
     the weak ones (share under ``min_significance``) with the group's dropped poles (if any)
     held in the basis. Returns ((m,) refined poles, (m,) bool: moved as a weak pole, (m,) bool: an
@@ -290,14 +303,20 @@ def _refine_group(modes, mine, data, s, L, synth_g, s_rej, L_rej):
         weak[k] = max(modes[i].significance, modes[i].significance_in_group) < data.opt.min_significance
     weak &= free & ~edge
     s_new, unlocated = _refine(data.freq, data.rows, synth_g, s, L, data.form, edge)
+    L_all, f_rej, strong = None if L is None else np.vstack([L, L_rej]), poles_to_modal(s_rej)[0], free & ~edge & ~weak
+    for i, k in mine.items():  # alone in its window: no other mode, no dropped pole of its group
+        near = abs(f_rej - fn[k]) <= WINDOW_HALF_WIDTHS * zeta[k] * fn[k]
+        strong[k] &= alone is not None and bool(alone[i]) and not near.any()
+    if strong.any():  # kept only where the refined window is at the noise (_window_at_noise)
+        s_new = _refine(data.freq, data.rows, synth_g, np.concatenate([s_new, s_rej]), L_all, data.form,
+                        np.concatenate([strong, np.zeros(s_rej.size, dtype=bool)]), at_noise=True)[0][:s.size]
     if weak.any():
-        L_all = None if L is None else np.vstack([L, L_rej])
         s_new = refine_poles(data.freq, data.rows, synth_g, np.concatenate([s_new, s_rej]), L_all, form=data.form,
                              free=np.concatenate([weak, np.zeros(s_rej.size, dtype=bool)]))[:s.size]
     return s_new, weak, unlocated
 
 
-def refine_adopted(modes: list, kept: dict, synthesis=None) -> tuple[list, list]:
+def refine_adopted(modes: list, kept: dict, synthesis=None, complete: bool = False) -> tuple[list, list]:
     """The merged modes with each pole refined against its dominant group's rows
     (:func:`refine_poles`; the group's other kept poles, the copies the merge dropped among
     them, held fixed). The shapes stay the group fits' (a pole moves by a fraction of its
@@ -310,30 +329,25 @@ def refine_adopted(modes: list, kept: dict, synthesis=None) -> tuple[list, list]
 
     Refined: the poles within :data:`EDGE_HALF_WIDTHS` of a band edge, and the weak ones
     (share of the response under ``min_significance``: kept by the own-peak rule), with the
-    poles their group's fit dropped in the basis. A weak pole is biased by what its group's
-    fit leaves out — above all its group's other aliases of its branch, dropped as weak
-    themselves (docs/lsce.md, "Known limit", session 12: the paper's sidewall same n = 45
-    at 298.91 Hz, +0.32 %, refitted with its group's dropped n = 57 pole at 354.76 Hz in the
-    basis, has its least-squares optimum at 297.91 Hz, −0.02 %; refined without them it
-    moved the wrong way then, n = 47: 306.05 → 304.29 Hz, truth 307.09) — and by LSCE's own
-    estimate, which a group whose fit dropped nothing keeps unless refined (session 35: at
-    the band-top refinement's code the same n = 45's group drops no pole and n = 47 refined
-    comes to 306.98 Hz; over the matrix the weak refinements without a dropped pole in
-    reach brought 5 modes within 0.3 % and took 1 out, docs/lsce.md "Session 35").
+    poles their group's fit dropped in the basis: a weak pole is biased by what its group's
+    fit leaves out, above all its group's other aliases of its branch, and by LSCE's own
+    estimate (docs/lsce.md, "Known limit" and "Session 35": the paper's sidewall same n = 45
+    at 298.91 Hz, +0.32 %, comes to 297.91 Hz, −0.02 %). With ``complete`` (the groups a
+    complete model: a full grid symmetric about its sensors, orders unmixed) also the strong
+    poles alone in their window, kept where it ends at the noise (module docstring).
 
-    An edge pole whose refinement ends on its box's edge (the FRFs' least-squares optimum
-    lies beyond ζ f or a factor 2 in damping) is not located by the data: LSCE's pole there
-    is the band-limited model's (a cut flank, the band's end) and nothing measures the
-    mode. Such poles are dropped (returned as rejections, docs/lsce.md, "Session 33") and
-    left out of the physical check of the others.
+    An edge pole whose refinement ends on its box's edge (the optimum lies beyond ζ f or a
+    factor 2 in damping) is not located by the data; such poles are dropped (returned as
+    rejections, docs/lsce.md, "Session 33") and left out of the physical check of the others.
     """
     out, moves, drop = list(modes), [], set()
     rej_all = np.concatenate([k[4] for k in kept.values()]) if kept else np.zeros(0, dtype=complex)
+    alone = _alone(modes) if complete else None
     for g, (data, s, L, synth_g, s_rej, L_rej) in kept.items():
         mine = {i: int(np.flatnonzero(s == m.pole)[0]) for i, m in enumerate(modes)
                 if m.group == g and np.any(s == m.pole)}
         if mine:
-            s_new, weak, unlocated = _refine_group(modes, mine, data, s, L, synth_g, s_rej, L_rej)
+            s_new, weak, unlocated = _refine_group(modes, mine, data, s, L, synth_g, s_rej, L_rej, alone)
             drop |= {i for i, k in mine.items() if unlocated[k]}
             moves += [(i, s_new[k], weak[k], data) for i, k in mine.items() if s_new[k] != s[k] and not unlocated[k]]
     live = np.array([i not in drop for i in range(len(out))], dtype=bool)
@@ -353,6 +367,15 @@ def refine_adopted(modes: list, kept: dict, synthesis=None) -> tuple[list, list]
                           "with the modes above the band's top given a pole it explains no more than noise)"}
                for i in sorted(drop)]
     return [m for i, m in enumerate(out) if live[i]], dropped
+
+
+def _alone(modes) -> np.ndarray:
+    """(m,) bool: no other mode's half-power band reaches the mode's window (its group holds it alone)."""
+    fn, zeta = poles_to_modal(np.array([m.pole for m in modes], dtype=complex))
+    hw = zeta * fn
+    d = np.abs(fn[:, None] - fn[None, :]) - WINDOW_HALF_WIDTHS * hw[:, None] - hw[None, :]
+    np.fill_diagonal(d, np.inf)
+    return np.all(d > 0, axis=1)
 
 
 def _physical_residual(data, synthesis, poles, i) -> float:
