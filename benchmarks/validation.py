@@ -732,6 +732,10 @@ realisation to realisation (LSCE's noise bias on modes of 1–2 lines per half-w
 the FRFs' least-squares refinement removes), so they are not the tests' information limit
 that session 38 read. Refining every strong pole was measured and not adopted: matrix paper
 1173 → 1171 found, spurious 6 → 14; ring 1311 → 1310, 5 → 6 (docs/lsce.md, "Session 42").
+Adopted instead: a strong pole refined when alone in its window, on complete symmetric
+grids with unmixed orders. The matrix is unchanged in every count. The draw 7000 gives ring
+630 → 632 / 640 found and 17 → 15 / 831 spurious, with two ring tests still over 5 % (4 / 62,
+4 / 76); the paper is unchanged (555 / 610, 8 / 751).
 
 """
 
