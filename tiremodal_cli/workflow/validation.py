@@ -41,8 +41,9 @@ from tiremodal_cli.workflow.validation_scoring import EXPECTED_DIAGNOSIS, TOLERA
 from tiremodal_cli.workflow.validation_scoring import (detectable, diagnosis_right, expected_groups, read_modes,
                                                        score_modes)
 
-__all__ = ["Case", "FACTORS", "HELD_OUT_LEVELS", "REFERENCE", "PHYSICS", "PAIRS", "EXPECTED_DIAGNOSIS", "matrix",
-           "held_out_levels", "config_for", "expected_groups", "score_modes", "run_case", "TOLERANCE"]
+__all__ = ["Case", "FACTORS", "HELD_OUT_LEVELS", "REFERENCE", "PHYSICS", "PAIRS", "EXPECTED_DIAGNOSIS", "Tyre", "TYRES",
+           "matrix", "held_out_levels", "config_for", "nominal_params", "expected_groups", "score_modes", "run_case",
+           "TOLERANCE"]
 
 #: Levels of every factor (the reference's level first).
 FACTORS = {
@@ -79,6 +80,57 @@ PAIRS = {
     "ring": ("tangential+cavity", "sidewall_coupling+mass"),
 }
 
+@dataclass(frozen=True)
+class Tyre:
+    """A tyre the matrix can be run on.
+
+    Attributes
+    ----------
+    params : the paper model's parameters (SI): the ``paper`` generator's truth, and for
+        what a user knows of a tyre (R, b, P0, rhoA, m_s) the nominal values ``run`` is given
+    ring : the finite-element ring's parameters (SI): the ``ring`` generator's truth
+    ring_variants : {physics name: ring parameter overrides}, the keys of ``RING_VARIANTS``
+    effects : {paper effect name: its parameter values} ({} or a missing name: the effect's
+        defaults, which are GL073A's)
+    rim_mass_kg : kg, the free rim of the paper generator's physics ``rim``
+    """
+
+    params: TyreParameters
+    ring: RingParameters
+    ring_variants: dict
+    effects: dict
+    rim_mass_kg: float
+
+
+#: The tyres: ``gl073a``, the paper's 16.00R20 truck tyre, on which every rule of the modal
+#: stage was measured; ``car``, a 205/55 R16 passenger-car tyre at 2.2 bar that no rule was
+#: measured on (held out: other dimensions, 8 × less tread mass, 17 × less hoop tension, its
+#: sidewall resonance and branch crowd at 303 Hz rather than 168 Hz). The car's values are
+#: plausible magnitudes for that size (docs/validation.md, "Another tyre"), not a measured
+#: tyre; each variant keeps the truck variant's proportion to its tyre (e.g. the sidewall
+#: tension about 11 % of the hoop tension; a 50 g sensor, 1 % of the tread's mass).
+TYRES: dict[str, Tyre] = {
+    "gl073a": Tyre(TyreParameters(), RingParameters(), RING_VARIANTS, {}, 60.0),
+    "car": Tyre(
+        TyreParameters(R=0.30, b=0.16, P0=2.2e5, rhoA=2.39, m_s=1.38, EI=5.0, k_r1=3.0e6, k_r2=2.0e6),
+        RingParameters(R=0.30, b=0.16, P0=2.2e5, rhoA=2.39, m_s=1.38, EI=5.0, k_r1=3.0e6, k_r2=2.0e6,
+                       rim_radius=0.203, cavity_radius=0.25, cavity_area=0.0155, rho_air=3.8),
+        {"none": {},
+         "tangential": {"tangential": True, "EA": 3.0e7, "k_t1": 1.0e6, "k_t2": 0.7e6},
+         "extensible": {"tangential": True, "EA": 1.5e6, "k_t1": 1.0e6, "k_t2": 0.7e6},
+         "sidewall_shear": {"tangential": True, "EA": 3.0e7, "k_t1": 1.0e6, "k_t2": 0.7e6,
+                            "sidewall_tangential": True},
+         "timoshenko": {"kGA": 2.0e5, "rhoI": 2.39 * 0.012**2 / 12},
+         "sidewall_coupling": {"sidewall_T": 1.2e3},
+         "rim": {"rim_mass": 10.0, "fixture_k": 1.0e6},
+         "cavity": {"cavity": True},
+         "mass": {"masses": ((45.0, 0.05),)}},
+        {"sidewall_membrane": {"T_s": 1.0e3}, "air_cavity": {"f_cavity_hz": 218.0},
+         "added_mass": {"m_a": 0.05}, "tangential": {"k_t": 1.0e6},
+         "timoshenko": {"rhoI": 6.0e-4, "c_s": 5.0e-6}},
+        10.0),
+}
+
 #: Record length of every case, s (frequency resolution 0.5 Hz: a tenth of the narrowest
 #: half-power bandwidth, 2ζf = 2 × 0.02 × 55 Hz ≈ 2 Hz, is resolved five times over).
 RECORD_S = 2.0
@@ -99,10 +151,11 @@ class Case:
     record_s: float = RECORD_S
     seed: int = 0
     label: str = "reference"
+    tyre: str = "gl073a"  # a TYRES name
 
     @property
     def name(self) -> str:
-        return f"{self.generator}:{self.label}"
+        return f"{self.generator}:{self.label}" if self.tyre == "gl073a" else f"{self.generator}[{self.tyre}]:{self.label}"
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -111,10 +164,11 @@ class Case:
 REFERENCE = {k: v[0] for k, v in FACTORS.items()} | {"physics": "none"}
 
 
-def matrix(*, combinations: int = 4, seed: int = 2026, generators=("ring", "paper")) -> list[Case]:
+def matrix(*, combinations: int = 4, seed: int = 2026, generators=("ring", "paper"), tyre: str = "gl073a") -> list[Case]:
     """Every level of every factor, one factor at a time around the reference, for both
     generators; the pairs of effects of :data:`PAIRS`; and ``combinations`` seeded random
-    combinations per generator (each with one or two physical effects)."""
+    combinations per generator (each with one or two physical effects); all on ``tyre``
+    (a :data:`TYRES` name; the same seeds and levels whatever the tyre)."""
     rng = np.random.default_rng(seed)
     out = []
     for g in generators:
@@ -135,13 +189,20 @@ def matrix(*, combinations: int = 4, seed: int = 2026, generators=("ring", "pape
             label = "combo: " + ", ".join(f"{f}={v}" for f, v in lv.items() if v != REFERENCE[f]) + f", physics={ph}"
             out.append(Case(generator=g, **(lv | {"physics": ph}), seed=len(out), label=label))
     return [dataclasses.replace(c, sample_rate=float(c.sample_rate), n_points=int(c.n_points),
-                                n_hits=int(c.n_hits), noise=float(c.noise)) for c in out]
+                                n_hits=int(c.n_hits), noise=float(c.noise), tyre=_tyre(tyre)) for c in out]
 
 
-def held_out_levels(count: int, *, seed: int = 5000, generators=("ring", "paper")) -> list[Case]:
+def _tyre(name: str) -> str:
+    if name not in TYRES:
+        raise ValueError(f"tyre {name!r}; allowed: {', '.join(TYRES)}")
+    return name
+
+
+def held_out_levels(count: int, *, seed: int = 5000, generators=("ring", "paper"), tyre: str = "gl073a") -> list[Case]:
     """``count`` seeded random tests per generator at the levels of :data:`HELD_OUT_LEVELS`,
     each with one or two physical effects (or none, one case in three): set-ups no rule was
-    measured on, for ``benchmarks/validation.py --held-out-levels``."""
+    measured on, for ``benchmarks/validation.py --held-out-levels``; on ``tyre`` (the same
+    draw whatever the tyre)."""
     rng = np.random.default_rng(seed)
     out = []
     for g in generators:
@@ -154,7 +215,7 @@ def held_out_levels(count: int, *, seed: int = 5000, generators=("ring", "paper"
             label = "held-out: " + ", ".join(f"{f}={v}" for f, v in lv.items()) + f", physics={ph}"
             out.append(Case(generator=g, **(lv | {"physics": ph}), seed=seed + len(out), label=label))
     return [dataclasses.replace(c, sample_rate=float(c.sample_rate), n_points=int(c.n_points), n_hits=int(c.n_hits),
-                                noise=float(c.noise), record_s=float(c.record_s)) for c in out]
+                                noise=float(c.noise), record_s=float(c.record_s), tyre=_tyre(tyre)) for c in out]
 
 
 def _compatible(generator: str, physics: str) -> str:
@@ -182,14 +243,25 @@ def config_for(case: Case) -> SimulationConfig:
     common = dict(n_points=case.n_points, n_hits=case.n_hits, sample_rate=case.sample_rate, n_samples=ns,
                   noise=case.noise, faults=faults, seed=case.seed, n_max=60)
     parts = [p for p in case.physics.split("+") if p != "none"]
+    tyre = TYRES[case.tyre]
     if case.generator == "ring":
         values = {}
         for p in parts:
-            values.update(RING_VARIANTS[p])
-        return SimulationConfig(model="ring", ring=RingParameters().replace(**values), **common)
-    params = TyreParameters(m_w=60.0) if "rim" in parts else TyreParameters()
-    effects = {p: {} for p in parts if p != "rim"}
+            values.update(tyre.ring_variants[p])
+        return SimulationConfig(model="ring", ring=tyre.ring.replace(**values), **common)
+    params = tyre.params.replace(m_w=tyre.rim_mass_kg) if "rim" in parts else tyre.params
+    effects = {p: dict(tyre.effects.get(p, {})) for p in parts if p != "rim"}
     return SimulationConfig(params=params, effects=effects, **common)
+
+
+def nominal_params(case: Case) -> TyreParameters:
+    """The parameters a user gives ``run`` for the case's tyre: what one knows of a tyre
+    before a test — its dimensions R and b, pressure P0 (``run`` takes the measurement's),
+    tread and sidewall masses per length — with the stiffnesses (k_r1, k_r2, EI, which the
+    fit identifies) at the paper's GL073A values, a start the global search leaves. On
+    GL073A these are ``TyreParameters()``, what ``run`` takes when given none."""
+    t = TYRES[case.tyre].params
+    return TyreParameters().replace(R=t.R, b=t.b, P0=t.P0, rhoA=t.rhoA, m_s=t.m_s)
 
 
 def _detectable_parts(case: Case, params: TyreParameters) -> dict:
@@ -225,7 +297,7 @@ def run_case(case: Case, workdir) -> dict:
     rec = {"case": case.to_dict(), "name": case.name, "simulate_s": round(t_sim, 2)}
     t1 = time.perf_counter()
     try:
-        summary = run_pipeline(meas, workdir / "run", RunOptions(form=case.form))
+        summary = run_pipeline(meas, workdir / "run", RunOptions(form=case.form), params=nominal_params(case))
     except Exception as exc:  # the scorecard records any failure of run, traceback included
         rec.update(status="error", error=f"{type(exc).__name__}: {exc}",
                    traceback=traceback.format_exc(limit=3), run_s=round(time.perf_counter() - t1, 2))
