@@ -203,3 +203,69 @@ def test_a_pole_broadened_by_its_alias_s_flank_is_no_crowd_by_its_own_damping(ri
     out = crowds(f, z, ns, ns, ["same"] * 18, [True] * 18, N)
     assert out[11] == ()
     assert out[12] == (12, 22)
+
+
+def _anti_phase(ring: RingParameters, f_max_hz: float) -> dict:
+    """{n: f (Hz)} of a finite-element ring's anti-phase branch (its lowest mode of each order)."""
+    from tiremodal_cli.tyre.ring import elements_for
+    m = ring_modes(ring.replace(n_elements=max(ring.n_elements, elements_for(ring, f_max_hz))), f_max_hz=f_max_hz)
+    out = {}
+    for f, n, b in zip(m.freq_hz, m.n, m.branch):
+        if b == "opposite":
+            out.setdefault(int(n), float(f))
+    return out
+
+
+@pytest.fixture(scope="module")
+def car_opposite():
+    """The passenger-car tyre's anti-phase branch (``TYRES["car"]``, no physics added): n = 0
+    at 336.5 Hz, 16.8 Hz per order at n = 7 and 73 Hz at n = 14."""
+    from tiremodal_cli.workflow.validation import TYRES
+    return _anti_phase(TYRES["car"].ring, 800.0)
+
+
+@pytest.mark.parametrize("tyre, variant", [("car", "none"), ("car", "timoshenko"), ("car", "tangential"),
+                                           ("gl073a", "timoshenko")])
+def test_the_rising_steps_keep_every_true_order_of_the_anti_phase_branch(tyre, variant):
+    """The rule's false alarms on the physics: every order of the finite-element ring's
+    anti-phase branch stays a point of the dispersion — the Timoshenko tread's declining
+    steps (3 % per order) and the tangential stiffness's fall of half a step at n = 3 → 4
+    included."""
+    from tiremodal_cli.modal.crowds import _off_the_rising_steps
+    from tiremodal_cli.workflow.validation import TYRES
+    t = TYRES[tyre]
+    pts = _anti_phase(t.ring.replace(**t.ring_variants[variant]), 1300.0)
+    assert len(pts) >= 15
+    assert _off_the_rising_steps(pts, "opposite", {n: 0.0 for n in pts}) == pts  # even with no tolerance
+
+
+def test_a_copy_read_high_above_the_band_top_order_makes_no_false_crowd(car_opposite):
+    """The car tyre at 1,024 Hz on 34 points: its anti-phase branch n = 0 … 7 in the band
+    (377.9 Hz the top), ζ = 0.02, and a copy of n = 7 one line (1.1 Hz) above it read n = 16
+    (the matrix's car test). By the truth n = 7 is no crowd: its aliases n = 27 and 41 lie
+    hundreds of hertz above. Taken as a point of the branch, the copy continued it at 0.12 Hz
+    per order and put n = 27 and 41 inside n = 7's 15 Hz bandwidth."""
+    from tiremodal_cli.modal.crowds import crowds
+    N = 34
+    ns = list(range(8))
+    f = [car_opposite[n] for n in ns]
+    assert car_opposite[14] - car_opposite[7] > 2 * 0.02 * car_opposite[7]  # n = 27, 41 higher still
+    base = crowds(f, [0.02] * 8, ns, ns, ["opposite"] * 8, [True] * 8, N)
+    out = crowds(f + [f[7] + 1.1], [0.02] * 9, ns + [16], ns + [16], ["opposite"] * 9, [True] * 9, N)
+    assert base[7] == () and out[7] == ()
+
+
+@pytest.mark.parametrize("n_read, f_read", [(20, 506.7), (15, 449.0)])
+def test_a_row_read_high_below_its_branch_does_not_flatten_it(car_opposite, n_read, f_read):
+    """The car tyre on 40 points (a row at 506.7 Hz read n = 20) and in receptance (449.0 Hz
+    read n = 15): each lies below the branch's n = 14 at 728.6 Hz, and the running maximum
+    made the branch flat from n = 14 on, putting n = 14 in a crowd with its aliases. Left
+    out of the dispersion, the crowd flags are those of the branch alone."""
+    from tiremodal_cli.modal.crowds import crowds
+    N = 40
+    ns = list(range(15))
+    f = [car_opposite[n] for n in ns]
+    base = crowds(f, [0.02] * 15, ns, ns, ["opposite"] * 15, [True] * 15, N)
+    n_sp = min(n_read % N, N - n_read % N)
+    out = crowds(f + [f_read], [0.02] * 16, ns + [n_read], ns + [n_sp], ["opposite"] * 16, [True] * 16, N)
+    assert out[:15] == base and base[14] == ()

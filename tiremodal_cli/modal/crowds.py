@@ -33,6 +33,11 @@ __all__ = ["branch_dispersion", "candidate_limit", "crowds", "saturating_dispers
 #: fewest clear orders n ≥ 2 of a branch the saturating form (4 parameters) is fitted to
 MIN_ORDERS_FIT = 6
 
+#: the lowest order from which the anti-phase branch's steps are judged
+#: (:func:`_off_the_rising_steps`): below it a free rim (n = 1), the belt's extension (n = 0)
+#: and a tangential stiffness (n ≤ 3) move orders off the branch's rise
+STEADY_FROM = 3
+
 
 def _fit_given(A: float, n, x):
     """(α, β, δ) of (A − x)(α + β n² − δ x) = 1 by least squares in x (a residual r of
@@ -198,6 +203,44 @@ def _below_the_other_root(points: dict, br: str, clear_pts: dict) -> dict:
     return out
 
 
+def _off_the_rising_steps(points: dict, br: str, half_width: dict) -> dict:
+    """The anti-phase ("opposite") branch's clear orders ({n: f}) less those its rise cannot
+    hold.
+
+    The anti-phase root of the order-n system (MODEL.md; :func:`saturating_dispersion`)
+    rises ever faster with n — K_n grows as T n²/R² and EI n⁴/R⁴ — so its step
+    f(n + 1) − f(n) grows with n. Of the physics the generators hold, only a Timoshenko
+    tread's shear bends it towards a straight line, lowering a step by at most 3.2 % per
+    order (the truth of both tyres, ``TYRES``, and both generators above n = 3; below
+    :data:`STEADY_FROM` a free rim, the belt's extension and a tangential stiffness move
+    n = 0 … 2 off the rise, and steps fall by up to a half). So an order m read above the
+    branch's last two kept orders n1 < n2 (n1 ≥ :data:`STEADY_FROM`) whose rise over the
+    gap, f_m − f_n2, falls short of half the last step's, (m − n2) (f_n2 − f_n1) / (n2 − n1),
+    by more than m's half-power half-width ``half_width[m]`` (ζ f, Hz: orders within a
+    bandwidth of each other are not resolved, and their poles scatter by a fraction of it —
+    the paper's 24-point Timoshenko test at 2,560 Hz, n = 56 … 59 on steps of 6–7 Hz at ζ = 3 %)
+    is no point of the branch — halving a step takes 21 orders of the steepest decline
+    measured — but a copy or leak of a lower order read at its spatial order, and is left out
+    of the dispersion. Measured on the passenger-car tyre (docs/validation.md, "Another
+    tyre"): a copy of n = 7 at 378.95 Hz read n = 16, 1.1 Hz above n = 7 (the 1,024 Hz test),
+    continued the branch at 0.12 Hz per order and put n = 7 in a false crowd with its aliases
+    n = 27 and 41; a row at 506.7 Hz read n = 20 under n = 14's 728.6 Hz (40 points), and one
+    at 449.0 Hz read n = 15 (receptance), flattened the branch from n = 14 on through the
+    running maximum, the same false crowd at n = 14. Kept orders are judged in turn from the
+    lowest: a wrong order read too high would shadow the right ones above it (not met on
+    the matrix of either tyre). The in-phase branch saturates: no such rule."""
+    if br != OPPOSITE:
+        return points
+    kept: list[tuple[int, float]] = []
+    for n, f in sorted(points.items()):
+        if len(kept) >= 2 and kept[-2][0] >= STEADY_FROM:
+            (n1, f1), (n2, f2) = kept[-2], kept[-1]
+            if f - f2 + half_width[n] < 0.5 * (n - n2) * (f2 - f1) / (n2 - n1):
+                continue
+        kept.append((n, f))
+    return dict(kept)
+
+
 def _alias_class(m: int, n_points: int, n_hi: int) -> set:
     """The orders 0 … n_hi that alias onto spatial order m on a grid of N points (j N ± m)."""
     return {c for j in range(0, n_hi // max(n_points, 1) + 2) for c in (j * n_points - m, j * n_points + m)
@@ -248,7 +291,8 @@ def crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=
     z = np.asarray(damping_ratio, dtype=float)
     clear_pts = {br: {ns[r]: f[r] for r in range(k) if branch[r] == br and clear[r]} for br in set(branch) - {None}}
     for br in clear_pts:
-        on = _anchored(_below_the_other_root(clear_pts[br], br, clear_pts), n_points)
+        hw = {ns[r]: z[r] * f[r] for r in range(k) if branch[r] == br and clear[r]}
+        on = _anchored(_off_the_rising_steps(_below_the_other_root(clear_pts[br], br, clear_pts), br, hw), n_points)
         f_of = branch_dispersion(list(on), list(on.values()), br)
         if f_of is None:
             continue
