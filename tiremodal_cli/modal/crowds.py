@@ -267,21 +267,20 @@ def crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=
     cavity mode at 254 Hz read n = 38, a leak at 625 Hz read n = 37, which the running
     maximum would lift to the branch's top, flattening it) against their orders,
     interpolated, and beyond the highest measured order continued (:func:`branch_dispersion`:
-    the same-direction branch flattens under the sidewall resonance, where many orders pile
-    up). Candidates run up to :func:`candidate_limit`. An alias order that
-    another mode of the branch holds is no candidate (its pole was found apart from this
-    one, so the two were resolved). Nor is one whose own pole the estimator found more than
-    this mode's bandwidth away: a mode reading the same spatial order (so any of its aliases)
-    with the order's dispersion frequency f(c) in its own half-power band, nearer to f(c) than
-    this mode, is order c's pole (not when it is the other member of this mode's split pair,
-    ``pair``: one order twice), and c's mode lies there, not at the extrapolated f(c) (the
-    ring's n = 11 same at 159.4 Hz: its alias n = 23 extrapolated to 165.8 Hz, inside the
-    6.4 Hz band, found at 166.8 Hz, outside it). The bandwidth is 2ζf with ζ the lesser of the
-    mode's own damping and the median over its branch's clear modes (session 39): a pole
-    that partly blends the flank of a neighbour it does not resolve is broader than the mode
-    (the ring's n = 11 at 5 % noise: ζ 0.0224, not 0.020; its alias n = 23, 7.06 Hz off by
-    the truth, fell inside 2ζf = 7.1 Hz, not 6.4 Hz). Returns, per
-    mode, the sorted candidate orders (the mode's own included) when it is in a crowd, else ().
+    the same-direction branch flattens under the sidewall resonance, where many orders pile up).
+    Candidates run up to :func:`candidate_limit`. An alias order that another mode of the branch
+    holds is no candidate (its pole was found apart from this one, so the two were resolved). Nor is
+    one whose own pole the estimator found more than this mode's bandwidth away: a mode reading the
+    same spatial order (so any of its aliases) with the order's dispersion frequency f(c) in its own
+    half-power band, nearer to f(c) than this mode, is order c's pole (not when it is the other
+    member of this mode's split pair, ``pair``: one order twice), and c's mode lies there, not at
+    the extrapolated f(c) (the ring's n = 11 same at 159.4 Hz: its alias n = 23 extrapolated to
+    165.8 Hz, inside the 6.4 Hz band, found at 166.8 Hz, outside it). The bandwidth is 2ζf with ζ
+    the lesser of the mode's own damping and the median over its branch's clear modes (session 39):
+    a pole that partly blends the flank of a neighbour it does not resolve is broader than the mode
+    (the ring's n = 11 at 5 % noise: ζ 0.0224, not 0.020; its alias n = 23, 7.06 Hz off by the
+    truth, fell inside 2ζf = 7.1 Hz, not 6.4 Hz). Returns, per mode, the sorted candidate orders
+    (the mode's own included) when it is in a crowd, else ().
     """
     k = len(freq_hz)
     out = [()] * k
@@ -291,13 +290,13 @@ def crowds(freq_hz, damping_ratio, ns, n_spatial, branch, clear, n_points, pair=
     z = np.asarray(damping_ratio, dtype=float)
     clear_pts = {br: {ns[r]: f[r] for r in range(k) if branch[r] == br and clear[r]} for br in set(branch) - {None}}
     for br in clear_pts:
-        hw = {ns[r]: z[r] * f[r] for r in range(k) if branch[r] == br and clear[r]}
+        mine = [r for r in range(k) if branch[r] == br and clear[r]]
+        hw = {ns[r]: z[r] * f[r] for r in mine}  # half-power half-widths, Hz
         on = _anchored(_off_the_rising_steps(_below_the_other_root(clear_pts[br], br, clear_pts), br, hw), n_points)
         f_of = branch_dispersion(list(on), list(on.values()), br)
         if f_of is None:
             continue
-        n_hi = candidate_limit(n_points, max(on))
-        z_one = float(np.median([z[r] for r in range(k) if branch[r] == br and clear[r]]))
+        n_hi, z_one = candidate_limit(n_points, max(on)), float(np.median(z[mine]))
 
         for r in range(k):
             if branch[r] != br:
