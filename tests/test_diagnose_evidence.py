@@ -65,6 +65,25 @@ def test_an_n1_mode_of_a_flat_branch_is_no_cavity():
     assert [round(b["frequency_hz"], 1) for b in band] == [128.4]
 
 
+def test_an_n1_row_beside_a_crowd_is_no_cavity():
+    """A crowd (lsce: several orders alias onto one spatial order within a bandwidth) is a
+    flat branch too. The passenger-car tyre's in-phase branch crowds at 303 Hz, inside its
+    cavity band: a test with no cavity read its n = 35 (36 points) as n = 1 opposite at
+    302.9 Hz, not in a crowd itself, beside crowd rows of other orders 0.2–1.3 Hz below, and
+    the diagnosis adopted a cavity with no coupling on it. Beside those rows it is no
+    evidence; alone it still is."""
+    p = TyreParameters(R=0.30, b=0.16, P0=2.2e5, rhoA=2.39, m_s=1.38, EI=5.0, k_r1=3.0e6, k_r2=2.0e6)
+    rows = [r for r in _rows(p) if not (r["branch"] == "same" and r["n"] >= 8)]  # the crowd's clear orders
+    opt = DiagnoseOptions(max_effects=0)
+    one = {"frequency_hz": 302.908, "n": 1, "branch": "opposite", "n_spatial": 1, "in_order": True,
+           "damping_ratio": 0.0199}
+    crowd = [{"frequency_hz": f, "n": n, "branch": "same", "n_spatial": n, "in_order": True, "damping_ratio": 0.02,
+              "crowd": True} for f, n in ((301.87, 14), (302.39, 9), (302.62, 5), (302.73, 2))]
+    assert diagnose(rows + [one] + crowd, p, opt).residual_before["unexplained_band_modes"] == []
+    band = diagnose(rows + [one], p, opt).residual_before["unexplained_band_modes"]
+    assert [round(b["frequency_hz"], 1) for b in band] == [302.9]
+
+
 def _pairs(p, effects):
     """Every order's two members (the model's lower and upper) as rows of one (n, branch)."""
     rows = []
