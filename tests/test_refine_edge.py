@@ -81,30 +81,3 @@ def test_a_mode_just_above_the_top_does_not_pull_the_one_below(seed):
     f1, z1 = poles_to_modal(refine_poles(f, H, lsfd(f, H, s0).synthesis, s0))
     assert abs(f1[0] - 480.0) / (0.03 * 480.0) < 0.005, f1
     assert abs(z1[0] / 0.03 - 1) < 0.01, z1
-
-
-def _merged(f_hz, zeta, significance, in_group):
-    from tiremodal_cli.modal.merge import MergedMode
-    w = 2 * np.pi * f_hz
-    return MergedMode(pole=complex(-zeta * w, w * np.sqrt(1 - zeta**2)), group=3, residues=np.ones(2, complex),
-                      significance=significance, order_energy={3: 1.0}, significance_in_group=in_group,
-                      frequency_std_hz=0.0)
-
-
-def test_a_weak_pole_at_the_top_needs_the_physical_frfs():
-    """A mode whose own window (WINDOW_HALF_WIDTHS half-widths) reaches past the band's top
-    must explain min_significance of the physical FRFs: its group's share there is
-    the flanks of the modes above the band (session 44: the car tyre's held-out 4,096 Hz test,
-    1,310.65 Hz at ζ 0.0025 holding 0.2 % of the physical response and 6 % of its group's,
-    2.2 of its half-widths under the 1,318 Hz top). A mode as weak farther down, and a
-    strong one at the top (the car's n = 20 at 1,251.8 Hz, 89 %), stay."""
-    from tiremodal_cli.modal.merge import off_edges
-    from tiremodal_cli.modal.refine import WINDOW_HALF_WIDTHS
-    top = 1318.0
-    modes = [_merged(1310.65, 0.0025, 0.002, 0.06), _merged(1251.8, 0.02, 0.89, 1.0),
-             _merged(1100.0, 0.02, 0.01, 0.3)]
-    assert 1310.65 + WINDOW_HALF_WIDTHS * 0.0025 * 1310.65 > top
-    kept, rej = off_edges(modes, 100.0, top, None, 0.05)
-    assert [round(poles_to_modal(m.pole)[0], 2) for m in kept] == [1251.8, 1100.0]
-    assert len(rej) == 1 and "at the band's top" in rej[0]["reason"]
-    assert len(off_edges(modes, 100.0, top, None)[0]) == 3  # no significance asked: the half-power bands only

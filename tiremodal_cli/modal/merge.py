@@ -345,31 +345,14 @@ def _pinned_apart(a: GroupMode, b: GroupMode, fa: float, fb: float, line_hz: flo
     return abs(fa - fb) > max(line_hz, 3 * float(np.hypot(a.frequency_std_hz, b.frequency_std_hz)))
 
 
-def off_edges(modes: list[MergedMode], f_lo: float, f_hi: float, exp_tau_s,
-              min_significance: float = 0.0) -> tuple[list, list]:
-    """Drop modes whose half-power band (f ± ζ f) reaches past an edge of the analysis band,
-    and weak modes at its top.
+def off_edges(modes: list[MergedMode], f_lo: float, f_hi: float, exp_tau_s) -> tuple[list, list]:
+    """Drop modes whose half-power band (f ± ζ f) reaches past an edge of the analysis band.
 
     Such a pole is fitted to one flank of a peak, usually a mode just outside the band
     leaking in (seen: the 308 Hz mode of a 40–300 Hz band returned at 299.5 Hz with a
     third of its damping); its frequency cannot be trusted. The lowest band line of a
     band starting at 0 Hz is no edge.
-
-    At the top, a mode whose own window — its half-power band and as much again on each
-    flank, :data:`~tiremodal_cli.modal.refine.WINDOW_HALF_WIDTHS` half-widths, where its
-    phase still turns — reaches past the band's top must also explain ``min_significance``
-    of the physical FRFs at its frequency: part of its data lies beyond the band, and there
-    its order group's rows hold the flanks of the modes above the band, which LSCE's
-    band-limited model leaves out, so a share within its group is no evidence of a mode (as
-    with points missing, :func:`~tiremodal_cli.modal.gaps.weak_in_frfs`). Measured
-    (docs/lsce.md, "Session 44"): on the passenger-car tyre, narrow poles at the top (ζ
-    0.2–0.8 % against the structure's 2 %, 1.3–3.0 half-widths under it) held 0.2–5 % of the
-    physical response and 6–63 % of their groups'; every true mode there held 45–99 %.
-    Judged out to the refinement's own limit (one half-width more, where it gives the modes
-    above the band a pole) the rule also took GL073A's weak sidewall n = 65 at 731.8 Hz, 4.6
-    half-widths under the 800 Hz top.
     """
-    from tiremodal_cli.modal.refine import WINDOW_HALF_WIDTHS
     kept, rejected = [], []
     f, z = poles_to_modal(correct_poles(np.array([m.pole for m in modes]), exp_tau_s))
     for m, fi, zi in zip(modes, f, z):
@@ -378,12 +361,6 @@ def off_edges(modes: list[MergedMode], f_lo: float, f_hi: float, exp_tau_s,
             rejected.append({"frequency_hz": float(fi), "damping_ratio": float(zi), "group": int(m.group),
                              "reason": f"at the band edge: its half-power band {fi - hw:.1f}–{fi + hw:.1f} Hz "
                                        f"crosses the analysis band {f_lo:.1f}–{f_hi:.1f} Hz"})
-        elif fi + WINDOW_HALF_WIDTHS * hw > f_hi and m.significance < min_significance:
-            rejected.append({"frequency_hz": float(fi), "damping_ratio": float(zi), "group": int(m.group),
-                             "reason": f"at the band's top: explains {100 * m.significance:.1f} % of the "
-                                       f"response at its frequency (its share within its group, "
-                                       f"{100 * m.significance_in_group:.1f} %, is the flanks of the modes "
-                                       f"above the band there, no evidence)"})
         else:
             kept.append(m)
     return kept, rejected

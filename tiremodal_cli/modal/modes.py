@@ -163,7 +163,7 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
                                           None if ortho and not gaps else synth,
                                           complete=ortho and not gaps and not (mixing and mixing["mixed"]))
         rejected += unlocated
-    modes, edge = off_edges(modes, band.freq[0], band.freq[-1], exp_tau_s, opt.min_significance)
+    modes, edge = off_edges(modes, band.freq[0], band.freq[-1], exp_tau_s)
     if not modes:
         raise no_stable_mode(band.freq, group_max)
     meta = {"band_hz": [float(band.freq[0]), float(band.freq[-1])], "spatial": bool(spatial),
