@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from tiremodal_cli.frf.estimate import FRFOptions, compute_frf
-from tiremodal_cli.modal.mixing import symmetric_copy_pvalue
+from tiremodal_cli.modal.merge import COPY_MAX_AMPLITUDE
+from tiremodal_cli.modal.mixing import MIXED_LOSS, mixed_orders_note, symmetric_copy_pvalue
 from tiremodal_cli.modal.modes import modal_table_from_frf
 from tiremodal_cli.modal.options import ModalOptions
 from tiremodal_cli.tyre.simulate import simulate
@@ -83,3 +84,18 @@ def test_a_mass_on_the_sensors_plane_mixes_the_orders(masses, mixed):
     mix = res.meta["order_mixing"]
     assert mix["tests"] >= 50 and mix["mixed"] is mixed
     assert (mix["fraction"] > 0.4) if mixed else (mix["fraction"] < 0.1)
+    note = res.meta["orders_mix"]  # what such a test cannot promise, said (modal.mixing.mixed_orders_note)
+    assert (note is not None and "orders mix" in note["statement"]) if mixed else note is None
+
+
+def test_the_note_names_what_mixed_the_orders():
+    """A mass off the sensors' planes (its antisymmetric share at or above the copy limit)
+    and one on them (symmetric copies in most tests) each give the note with its reason;
+    a symmetric test (neither) gives none."""
+    assert mixed_orders_note(0.01, {"tests": 100, "found": 3, "fraction": 0.03, "mixed": False}) is None
+    assert mixed_orders_note(None, None) is None
+    off = mixed_orders_note(2 * COPY_MAX_AMPLITUDE, None)
+    assert "antisymmetric share" in off["why"] and off["symmetric_copy_fraction"] is None
+    on = mixed_orders_note(0.002, {"tests": 574, "found": 300, "fraction": 0.52, "mixed": True})
+    assert "300 of 574" in on["why"] and on["symmetric_copy_fraction"] == 0.52
+    assert f"{100 * MIXED_LOSS['weak']:.0f} %" in on["statement"]

@@ -92,6 +92,7 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, method, tol_freq, tol_d
         echo_json({"modes": rows, "clusters": table.clusters, "rejected_modes": table.rejected,
                    "band_hz": table.meta["band_hz"], "band_reason": table.meta.get("band_reason"),
                    "spatial": table.meta["spatial"], "crowds": table.meta.get("crowds", []),
+                   "orders_mix": table.meta.get("orders_mix"),
                    "exp_tau_s": table.meta["exp_tau_s"],
                    "fit_error_median": float(np.nanmedian(table.fit_error)), "output": str(output)})
     else:
@@ -102,6 +103,8 @@ def lsce_cmd(frf_file, output, band, max_order, spatial, method, tol_freq, tol_d
                        f"{row['mpc']:5.2f} {row.get('n', ''):>3} {row.get('branch') or '':>8} "
                        + (f"{row['n_confidence']:5.2f}" if 'n_confidence' in row else f"{'':>5}")
                        + (f"  crowd: n in {row['n_candidates']}" if row.get('crowd') else ""))
+    if table.meta.get("orders_mix"):
+        say(f"modes: {table.meta['orders_mix']['statement']}")
 
 
 def _plots(table, r, stab, macp, shapes, synth, overwrite):

@@ -91,4 +91,6 @@ def run_cmd(measurement, outdir, params_file, param_items, band, exp_end, no_exp
     click.echo("identified: " + ", ".join(f"{k} = {v['value']:.5g} ± {v['std_error']:.2g}"
                                           for k, v in summary["identified"].items()))
     click.echo(f"diagnosis: {summary['verdict']}")
+    if summary.get("orders_mix"):
+        say(f"modes: {summary['orders_mix']['statement']}")
     say(f"wrote {outdir}/: {', '.join(MODES_OUTPUTS if modes_table else OUTPUTS)}, {MANIFEST}")

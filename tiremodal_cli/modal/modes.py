@@ -35,7 +35,7 @@ from tiremodal_cli.modal.plscf import confirmed
 from tiremodal_cli.modal.rescue import far_bands
 from tiremodal_cli.modal.groupmodes import group_modes
 from tiremodal_cli.modal.mirror import mirror_filled
-from tiremodal_cli.modal.mixing import order_mixing
+from tiremodal_cli.modal.mixing import mixed_orders_note, order_mixing
 from tiremodal_cli.modal.spatial import decompose, grid_points, is_circumferential, leakage
 from tiremodal_cli.modal.stabilization import stabilize
 from tiremodal_cli.modal.symmetry import antisymmetric_share
@@ -281,6 +281,7 @@ def _classified(res: ModalResult, r) -> tuple:
     share = res.meta.get("antisymmetric_share")  # None: not measured (no sensor angles)
     # the orders mix: a lumped mass on the sensors' plane (modal.mixing), or off it (no symmetry)
     mixed = bool((res.meta.get("order_mixing") or {}).get("mixed")) or bool(share and share >= COPY_MAX_AMPLITUDE)
+    res.meta["orders_mix"] = mixed_orders_note(share, res.meta.get("order_mixing"))
     res, classes = without_misreads(res, lambda m: classify(
         m.freq_hz, m.shapes[:, live], r.point_angle, locs, m.significance, m.damping_ratio,
         m.meta.get("significance_in_group"), m.group, mixed=mixed),

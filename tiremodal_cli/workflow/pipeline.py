@@ -273,7 +273,8 @@ def _summary(source, meta, rim_how, r, table, ident, rep, seconds) -> dict:
     return {
         "measurement": str(source["path"]), **meta, "rim": rim_how,
         "rejected_hits": [x.to_dict() for x in r.rejections],
-        "modes_found": int(table.n_modes), **_model_summary(ident, rep), "seconds": seconds,
+        "modes_found": int(table.n_modes), "orders_mix": (table.meta or {}).get("orders_mix"),
+        **_model_summary(ident, rep), "seconds": seconds,
     }
 
 
