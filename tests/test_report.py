@@ -286,3 +286,21 @@ def test_run_on_a_table_of_modes_reports_the_papers_comparison(tmp_path):
     page = _Page()
     page.feed(text)
     assert not page.external and len(page.images) >= 5
+
+
+def test_a_test_with_mixed_orders_says_so_in_its_report(sample_run):
+    """The report's modal table carries the note of a test whose orders mix (modal.mixing)
+    and none on the sample, whose orders do not mix."""
+    import html
+
+    from tiremodal_cli.modal.mixing import mixed_orders_note
+    from tiremodal_cli.workflow.run_page import run_body
+
+    out, _ = sample_run
+    man = json.loads((out / "run.json").read_text(encoding="utf-8"))
+    ident, diag = (json.loads((out / f).read_text(encoding="utf-8")) for f in ("identify.json", "diagnosis.json"))
+    pngs = {stem: b"png" for stem, _ in FIGURES}
+    assert man["summary"]["orders_mix"] is None
+    assert "Completeness" not in run_body(out, man, ident, diag, pngs)
+    man["summary"]["orders_mix"] = note = mixed_orders_note(0.2, None)
+    assert note["statement"] in html.unescape(run_body(out, man, ident, diag, pngs))

@@ -79,8 +79,8 @@ WEAK_PEAK_SHARE = 0.1
 
 #: what the validation matrices show of the modes a test with mixed orders loses
 #: (``benchmarks/mixed_completeness.py`` on the GL073A and car matrices and their held-out
-#: draws, session 45: 127 weak and 561 strong expected truth modes in 23 tests with a mass,
-#: 280 and 5,200 in 99 without): (weak missed or misread, strong, the same without a mass)
+#: draws, session 45: 127 weak and 561 strong expected truth modes in 14 tests with a mass,
+#: 280 and 5,200 in 144 without): (weak missed or misread, strong, the same without a mass)
 MIXED_LOSS = {"weak": 0.65, "strong": 0.037, "weak_symmetric": 0.13, "strong_symmetric": 0.001}
 
 

@@ -139,6 +139,8 @@ def _modes_section(p: _RunPage) -> list[str]:
                                             ("n", "n"), ("branch", "branch"), ("n_confidence", "n conf."),
                                             ("mpc", "MPC"), ("frequency_uncertainty_hz", "σf [Hz]")],
                                            left=("branch",))]
+    if p.summary.get("orders_mix"):  # (modal.mixing.mixed_orders_note)
+        out.append(f"<p><b>Completeness:</b> {escape(p.summary['orders_mix']['statement'])}.</p>")
     if from_modes:
         return out
     out += ["<h2>MAC matrix</h2>", p.fig("mac"), "<h2>Mode shapes</h2>", p.fig("shapes")]
