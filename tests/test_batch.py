@@ -132,6 +132,9 @@ def test_good_and_bad_tests(campaign):
     p = {r["test"]: float(r["inflation_pressure"]) for r in rows if r["inflation_pressure"]}
     assert p["p0700_r1"] == 7e5 and p["p0900_r1"] == 9e5
     assert all(float(r["k_r1"]) > 0 and float(r["k_r1_std_error"]) > 0 for r in rows if r["status"] == "done")
+    # no mass on these tyres: no test's orders mix (run.json's orders_mix note); a failed test is not judged
+    assert {r["orders_mix"] for r in rows if r["status"] == "done"} == {"False"}
+    assert {r["orders_mix"] for r in rows if r["status"] == "failed"} == {""}
     assert len(read_summary(out)) == 9
     for f in ("campaign_parameters.png", "campaign_parameters.svg", "campaign_frequencies.png"):
         assert (out / f).stat().st_size > 1000

@@ -187,6 +187,8 @@ def record(test: BatchTest, status: str, *, outdir: Path | None = None, reason: 
                                           "identified", "rms_error_pct", "adopted_effects", "parameter_off",
                                           "rms_before_pct", "rms_after_pct", "augmented_parameters", "verdict")})
         rec["rejected_hits"] = len(s.get("rejected_hits") or [])
+        # whether the test's orders mix (run.json's note, modal.mixing): None where not judged (a table of modes)
+        rec["orders_mix"] = bool(s["orders_mix"]) if "orders_mix" in s else None
         rec["pipeline_seconds"] = s.get("seconds")
         try:
             d = json.loads((Path(outdir) / "diagnosis.json").read_text(encoding="utf-8"))

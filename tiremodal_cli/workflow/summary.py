@@ -22,7 +22,7 @@ SUMMARY_CSV = "summary.csv"
 SUMMARY_JSONL = "summary.jsonl"
 
 _SCALARS = ("test", "file", "kind", "status", "reason", "tire", "inflation_pressure", "n_points", "n_hits",
-            "rejected_hits", "modes_found")
+            "rejected_hits", "modes_found", "orders_mix")
 _TAIL = ("adopted_effects", "parameter_off", "rms_error_pct", "rms_before_pct", "rms_after_pct", "verdict",
          "seconds", "output")
 
