@@ -738,6 +738,24 @@ grids with unmixed orders. The matrix is unchanged in every count. The draw 7000
 630 → 632 / 640 found and 17 → 15 / 831 spurious, with two ring tests still over 5 % (4 / 62,
 4 / 76); the paper is unchanged (555 / 610, 8 / 751).
 
+**Session 45: a third draw** (`--held-out-seed 9000`: 24 level combinations no session had
+seen, run once at e88c279 — the modal stage of session 44's last code — and not looked at
+before the run):
+
+| run | code | generator | found / expected | mislabelled | spurious / adopted | cases over 5 % | aliased read right | diagnoses right |
+|---|---|---|---|---|---|---|---|---|
+| held-out draw 9000 | e88c279 | paper | 566 / 577 (98 %) | 2 | 10 / 761 (1.3 %) | 1 (3 / 40) | 224 / 224 | 8 / 12 |
+| | | ring | 669 / 688 (97 %) | 6 | 18 / 847 (2.1 %) | 2 (7 / 71, 6 / 70) | 337 / 340 | 12 / 12 |
+
+Every case over 5 % has a mass, and three of the four wrong diagnoses. The ring's 20-point mass test
+(receptance, 2 hits) reads its opposite n = 11 … 16 (284–404 Hz) as n = 9 … 4, unflagged: three
+rows at 152.5, 155.0 and 158.8 Hz — the in-phase n = 9 and 11 (153.2, 159.4 Hz), fitted as three
+poles whose shares of the response sum to 2.9 (residues that cancel) — read as anti-phase n = 9,
+and the alias walk then takes the true n = 9 at 243.9 Hz for a mode off its branch. Three of
+the paper's four wrong diagnoses are added-mass tests (`rhoA`, `m_w` or the membrane adopted);
+the 30-point air cavity adopted `tangential`, its n = 1 cavity mode missed. Left for the next session
+(docs/lsce.md, "Session 45").
+
 """
 
 
