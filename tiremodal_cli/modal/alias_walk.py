@@ -70,7 +70,7 @@ def resolve_aliases(m: BranchModes) -> tuple[list[int], set[int]]:
     ns = [o.n_spatial for o in m.reads]
     idx_of = {br: sorted((r for r in range(len(m.reads)) if m.reads[r].branch == br), key=lambda r: m.freq_hz[r])
               for br in {o.branch for o in m.reads}}
-    own: dict = {br: set() for br in idx_of}
+    own: dict = {br: (_off_below_lower_orders(m, idx) if m.complete else set()) for br, idx in idx_of.items()}
     for second in (False, True):
         for br, idx in idx_of.items():
             others = [q for b, ix in idx_of.items() if b != br and b is not None for q in ix] if second else None
@@ -123,6 +123,37 @@ def _contradicted(m: BranchModes, idx: list[int], ns: list[int], others=None) ->
     return out
 
 
+def _off_below_lower_orders(m: BranchModes, idx: list[int]) -> set[int]:
+    """The clear modes of one branch (``idx``, by frequency), read at their spatial order
+    n_s ≥ 2, that lie below clear modes of the branch of two or more distinct orders
+    1 ≤ n < n_s, more than a split pair's 5 % above them — all below the branch's first
+    clear mode at the grid's highest order ⌊N/2⌋, where aliasing starts (above it the
+    aliases read at falling spatial orders, and a rising alias lies "below" the lower
+    spatial orders of the aliases after it). A branch rises with n from n = 1 (MODEL.md;
+    only the breathing mode n = 0 may sit anywhere), so it cannot hold n_s below lower
+    orders: the mode belongs to another branch or family, keeps its spatial order and does
+    not move the mark (as :func:`_contradicted`'s), and is no evidence that a later reading
+    of n_s is an alias. Two orders, not one: one clear mode above may itself be of another
+    family (the ring's tangential n = 1 above its branch's n = 29). Session 45: on the
+    held-out 20-point ring with a mass (seed 9000), the in-phase n = 9 and 11 (153.2 and
+    159.4 Hz), fitted as three poles read as anti-phase n = 9, lay below the anti-phase
+    n = 1 … 8 (184–226 Hz); the walk then took the true n = 9 at 243.9 Hz for a mode off its
+    branch and read n = 11 … 16 as n = 9 … 4, unflagged."""
+    f, reads = m.freq_hz, m.reads
+    at_top = [f[q] for q in idx if m.clear(q) and reads[q].n_spatial == max_order(m.n_points)]
+    f_top = min(at_top) if at_top else np.inf
+    out = set()
+    for i, r in enumerate(idx):
+        n_s = reads[r].n_spatial
+        if n_s < 2 or f[r] >= f_top or not m.clear(r):
+            continue
+        lower = {reads[q].n_spatial for q in idx[i + 1:]
+                 if 1.05 * f[r] < f[q] < f_top and m.clear(q) and 1 <= reads[q].n_spatial < n_s}
+        if len(lower) >= 2:
+            out.add(r)
+    return out
+
+
 def _walk_branch(m: BranchModes, idx: list[int], ns: list[int], own: frozenset | set = frozenset()) -> None:
     """:func:`_resolve_aliases` along one branch's modes ``idx`` (by frequency), into ``ns``;
     the modes ``own`` keep their spatial order and do not move the mark (:func:`_contradicted`)."""
@@ -139,7 +170,7 @@ def _walk_branch(m: BranchModes, idx: list[int], ns: list[int], own: frozenset |
         # ... and a spatial order that a clear lower mode of the branch holds, more than a
         # split pair's 5 % below, is an alias whether or not the mark reached ⌊N/2⌋
         # (each order appears once per branch)
-        seen = [q for q in idx[:i] if reads[q].n_spatial == n]
+        seen = [q for q in idx[:i] if reads[q].n_spatial == n and q not in own]  # (another family's: no evidence)
         far = any(f[r] - f[q] > 0.05 * f[r] and m.clear(q) for q in seen)
         if n == 1 and m.free_rim:
             # a free rim adds one n = 1 mode (the rim on the tyre's stiffness) to the tyre's
