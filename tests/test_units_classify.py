@@ -386,3 +386,56 @@ def test_a_mode_read_below_the_mark_does_not_set_the_branch_step():
     assert by_f[17].n == 3  # the unseen alias: read at its spatial order
     assert [by_f[n].n for n in range(20, 26)] == list(range(20, 26))
     assert all(by_f[n].aliased for n in range(20, 26))
+
+
+@pytest.mark.parametrize("below", [True, False])
+def test_a_clear_mode_below_its_lower_orders_does_not_alias_the_branch(below):
+    """20 points; the anti-phase branch n = 1 … 16 rising from 184 Hz (14 Hz per order above
+    n = 4) and, ``below`` it, three clear order-9 patterns at 152–159 Hz and two weak ones of
+    orders 8 and 7 at 161–163 Hz (the held-out ring with a mass, seed 9000: its in-phase
+    n = 9 and 11 fitted as three poles read on the anti-phase branch, and two crowd rows). A
+    branch rises with n from n = 1, so it cannot hold n = 9 below n = 1 … 8: those rows are
+    another branch's or family's, and they neither raise the walk's mark nor make the
+    branch's own orders aliases. Every order of the branch is read as its own (aliased above
+    N/2 = 10), with or without the rows below; before session 45 the branch's n = 7 … 16
+    were read as aliases of the rows below or at their spatial orders."""
+    th = _grid(20)
+    true_n = list(range(1, 17))
+    f_branch = [184.5, 185.4, 187.1, 189.2, 194.4, 201.5, 212.1, 225.9, 243.9, 263.8, 284.4, 306.8, 330.1, 354.2,
+                378.8, 404.0]
+    f_below, n_below, sig_below = ([152.5, 155.0, 158.8, 161.3, 163.4], [9, 9, 9, 8, 7], [0.8, 0.8, 0.8, 0.2, 0.2]) \
+        if below else ([], [], [])
+    f = f_below + f_branch
+    modes = [(n, -0.5) for n in n_below + true_n]
+    res = classify(f, _shapes(th, modes), th, LOCS, significance=sig_below + [0.8] * len(f_branch),
+                   damping_ratio=[0.02] * len(f))
+    branch = res[len(f_below):]
+    assert [c.n for c in branch] == true_n
+    assert [c.aliased for c in branch] == [n > 10 for n in true_n]
+    assert all(c.n == 9 and not c.aliased for c in res[:3] if below)  # they keep their spatial order
+
+
+def test_the_held_out_ring_with_a_mass_reads_its_anti_phase_orders():
+    """The readings of a real run (tests/data/alias_walk_ring_mass_20pts.json: the held-out
+    20-point ring with a mass, seed 9000, as classify handed them to the alias walk): three
+    clear rows at 152.5–158.8 Hz read as anti-phase n = 9 (the in-phase n = 9 and 11, fitted
+    as three poles) lie below the branch's n = 1 … 8. The finite-element ring's truth for the
+    anti-phase rows from 184 Hz on is n = 0 … 23, each order once (the split pairs of the
+    mass twice: 283.1 and 285.2 Hz are n = 11, 377.5 and 379.9 Hz n = 15); before session 45
+    the walk read n = 11 … 17 as 9 … 3."""
+    import json
+    from pathlib import Path
+
+    from tiremodal_cli.modal.alias_walk import BranchModes, Reading, resolve_aliases
+
+    d = json.loads((Path(__file__).parent / "data" / "alias_walk_ring_mass_20pts.json").read_text())
+    m = BranchModes(np.array(d["freq"]), [Reading(**r) for r in d["reads"]], d["n_points"],
+                    np.array(d["significance"]), np.array(d["significance_group"]), d["free_rim"], d["complete"],
+                    np.array(d["damping"]), d["mixed"])
+    ns, _ = resolve_aliases(m)
+    anti = [(f, n) for f, r, n in zip(d["freq"], d["reads"], ns) if r["branch"] == "opposite" and 180 < f < 600]
+    truth = {184.38: 0, 184.48: 1, 185.38: 2, 187.09: 3, 189.17: 4, 194.4: 5, 201.51: 6, 212.08: 7, 225.86: 8,
+             243.93: 9, 263.75: 10, 283.09: 11, 285.15: 11, 307.01: 12, 331.04: 13, 355.16: 14, 377.5: 15,
+             379.85: 15, 404.2: 16, 430.83: 17, 457.09: 18, 483.87: 19, 508.32: 20, 538.78: 21, 567.03: 22,
+             595.76: 23}
+    assert {round(f, 2): n for f, n in anti} == truth
