@@ -753,8 +753,15 @@ rows at 152.5, 155.0 and 158.8 Hz — the in-phase n = 9 and 11 (153.2, 159.4 Hz
 poles whose shares of the response sum to 2.9 (residues that cancel) — read as anti-phase n = 9,
 and the alias walk then takes the true n = 9 at 243.9 Hz for a mode off its branch. Three of
 the paper's four wrong diagnoses are added-mass tests (`rhoA`, `m_w` or the membrane adopted);
-the 30-point air cavity adopted `tangential`, its n = 1 cavity mode missed. Left for the next session
-(docs/lsce.md, "Session 45").
+the 30-point air cavity adopted `tangential`, its n = 1 cavity mode missed (docs/lsce.md,
+"Session 45").
+
+The alias walk's rule for clear rows below their branch's lower orders (3bd92e2, made after
+this draw was looked at, so not out-of-sample for it): ring 669 → **674** / 688 found,
+mislabelled 6 → **1**, aliased read right 337 → **342** / 345, spurious 18 / 847 unchanged
+(the 20-point mass test 47 → 52 / 53, `added_mass` now adopted; still 7 / 71 spurious, its
+three cancelling rows at 152–159 Hz among them); paper unchanged. The matrix, the car's
+matrix and the draw 7000: unchanged case by case.
 
 """
 
