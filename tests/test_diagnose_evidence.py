@@ -236,3 +236,21 @@ def test_a_free_rims_mode_out_of_order_is_evidence_for_the_rim():
     assert free.adopted == ("m_w",) and abs(free.augmented.parameters.m_w / 60 - 1) < 1e-3
     unknown = diagnose(rows, start, DiagnoseOptions(candidates=("m_w", "b"), max_effects=1))
     assert unknown.adopted == ()
+
+
+def test_a_mass_the_sensors_cannot_split_is_said_not_told_from_a_uniform_one():
+    """A 0.5 kg mass at the sensors' angle: the table holds each pair's lower member only
+    (the other's node is at the sensors), no split pair testifies for the mass, and a
+    uniform mass change (rhoA) fits the nearly uniform lowering (0.05–0.5 %) as well — by
+    AICc better. When the modal stage found the orders mixed (a lumped asymmetry) the
+    verdict says that one member per order does not tell the two apart; without that
+    finding it does not."""
+    p = TyreParameters()
+    f = model_frequencies(p, NS, BR, {"added_mass": {"m_a": 0.5, "theta_a": 0.0}}, members=["lower"] * len(NS))
+    rows = [{"frequency_hz": float(x), "n": n, "branch": b} for x, n, b in zip(f, NS, BR) if np.isfinite(x)]
+    plain = diagnose(rows, p, DiagnoseOptions(candidates=("added_mass", "rhoA"), max_effects=1))
+    mixed = diagnose(rows, p, DiagnoseOptions(candidates=("added_mass", "rhoA"), max_effects=1,
+                                              orders_mix="300 of 574 tests find a mode's symmetric copy"))
+    assert plain.adopted == mixed.adopted == ("rhoA",)
+    assert "does not tell the two apart" in mixed.verdict and "300 of 574" in mixed.verdict
+    assert "does not tell" not in plain.verdict

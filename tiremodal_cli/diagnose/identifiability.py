@@ -33,7 +33,7 @@ from tiremodal_cli.tyre.fit import fit
 from tiremodal_cli.tyre.fit_types import DEFAULT_BOUNDS, FitResult
 from tiremodal_cli.tyre.robust import RobustFit
 
-__all__ = ["GRID_POINTS", "profile_rim_mass", "mark_undetermined"]
+__all__ = ["GRID_POINTS", "profile_rim_mass", "mark_undetermined", "lumped_mass_note"]
 
 #: Points of the profile grid over m_w's search range (1 kg … 100 t: a factor 1.9 apart).
 GRID_POINTS = 19
@@ -135,3 +135,22 @@ def mark_undetermined(res: FitResult, profile: dict | None) -> FitResult:
     for name, (a, b) in profile["moves"].items():
         und[name] = f"{why}, it moving with m_w from {a:.3g} to {b:.3g}"
     return dataclasses.replace(res, undetermined=und)
+
+
+def lumped_mass_note(adopted, orders_mix: str | None) -> str:
+    """What a test whose orders mix cannot tell, when the diagnosis read a mass change as a
+    uniform one ("" otherwise).
+
+    A lumped mass mixes the circumferential orders (the modal stage's ``orders_mix``); on the
+    sensors' plane it also hides every pair's other member, whose node is at the sensors, so
+    the table holds one member per order and no split pair testifies for the mass. The one
+    member's lowering is then nearly uniform over the orders, and a uniform mass change
+    (``rhoA``) fits it as well (docs/diagnose.md, "Mixed orders as a mass's evidence":
+    ΔAICc −48.5 for rhoA against −39.5 for the mass on a 0.5 kg mass's own noise-free
+    frequencies). The verdict says so rather than let rhoA stand for what it cannot tell."""
+    if not orders_mix or "rhoA" not in adopted or "added_mass" in adopted:
+        return ""
+    return ("the test's orders mix (a lumped asymmetry: " + orders_mix + "), so the mass change read as rhoA may "
+            "be a mass lumped at the sensors' angle, whose split pairs the sensors cannot see: one member per "
+            "order does not tell the two apart")
+

@@ -37,7 +37,7 @@ from typing import NamedTuple
 from tiremodal_cli.diagnose.aliases import recheck, reread_aliased, trimmed_loss
 from tiremodal_cli.diagnose.candidates import choose, try_candidate
 from tiremodal_cli.diagnose.cavity import unexplained_band_modes
-from tiremodal_cli.diagnose.identifiability import mark_undetermined, profile_rim_mass
+from tiremodal_cli.diagnose.identifiability import lumped_mass_note, mark_undetermined, profile_rim_mass
 from tiremodal_cli.diagnose.options import PARAMETER_CANDIDATES, DiagnoseOptions, fit_options
 from tiremodal_cli.diagnose.refit import Trial, refit_robust
 from tiremodal_cli.diagnose.result import Candidate, Diagnosis, profile_text, report, verdict_text
@@ -178,7 +178,7 @@ def diagnose(rows, base_params: TyreParameters = TyreParameters(), opt: Diagnose
     unexplained = tuple(u for u in measured.unexplained if round(u["frequency_hz"], 6) not in explained)
     verdict = "; ".join(t for t in (verdict_text(s.adopted, s.tried, s.residual_before, s.residual_now, unexplained,
                                                  opt.max_effects),
-                                    profile_text(profile)) if t)
+                                    profile_text(profile), lumped_mass_note(s.adopted, opt.orders_mix)) if t)
     return Diagnosis(base=base.fit, augmented=s.current.fit, adopted=tuple(s.adopted), candidates=tuple(s.tried),
                      residual_before=s.residual_before, residual_after=s.residual_now, unexplained=unexplained,
                      cavity_modes=tuple(s.cavity_modes), relabelled=tuple(s.relabelled),

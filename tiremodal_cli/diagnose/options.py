@@ -39,6 +39,10 @@ class DiagnoseOptions:
     rim : "clamped" or "free" when the test's rim channel showed it (``run``), else "from
         parameters"; a rim the data show clamped has no mass or fixture to fit (the
         candidates m_w and rim_fixture are not tried)
+    orders_mix : why the modal stage found the test's circumferential orders mixed (its
+        ``orders_mix`` note's reason: a lumped asymmetry), or None (they do not, or not
+        known: a table of modes); the verdict then says what the test cannot tell apart
+        (:func:`~tiremodal_cli.diagnose.identifiability.lumped_mass_note`)
     """
 
     free: tuple[str, ...] = ("k_r1", "k_r2", "EI")
@@ -55,6 +59,7 @@ class DiagnoseOptions:
     cavity_radius: tuple[float, float] = (0.4, 1.0)
     search: str = "local"
     rim: str = "from parameters"
+    orders_mix: str | None = None
 
     def check(self, base: TyreParameters) -> None:
         if self.rim not in ("clamped", "free", "from parameters"):

@@ -209,8 +209,9 @@ def model_inputs(table, params: TyreParameters, rim_how: str, opt: RunOptions, s
     sentence) and grid of points. ``rows``: the table's rows when they are not ``to_rows(table)``
     (a table read back from modal.h5 lacks the modal stage's frequency uncertainties; a
     benchmark passes modes.csv's); ``search``: DiagnoseOptions.search (``run``: "local")."""
+    mix = None if isinstance(table, list) else (table.meta or {}).get("orders_mix")
     dopt = DiagnoseOptions(seed=opt.seed, noise_floor_pct=opt.noise_floor_pct, max_effects=opt.max_effects,
-                           rim=rim_state(rim_how), search=search)
+                           rim=rim_state(rim_how), search=search, orders_mix=mix["why"] if mix else None)
     if rows is None:
         rows = table if isinstance(table, list) else to_rows(table)
     what = "modes.csv" if isinstance(table, list) else "modal.h5"
