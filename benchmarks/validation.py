@@ -744,7 +744,7 @@ before the run):
 
 | run | code | generator | found / expected | mislabelled | spurious / adopted | cases over 5 % | aliased read right | diagnoses right |
 |---|---|---|---|---|---|---|---|---|
-| held-out draw 9000 | e88c279 | paper | 566 / 577 (98 %) | 2 | 10 / 761 (1.3 %) | 1 (3 / 40) | 224 / 224 | 8 / 12 |
+| held-out draw 9000 | e88c279 | paper | 566 / 577 (98 %) | 2 | 10 / 761 (1.3 %) | 2 (3 / 40, 4 / 59) | 224 / 224 | 8 / 12 |
 | | | ring | 669 / 688 (97 %) | 6 | 18 / 847 (2.1 %) | 2 (7 / 71, 6 / 70) | 337 / 340 | 12 / 12 |
 
 Every case over 5 % has a mass, and three of the four wrong diagnoses. The ring's 20-point mass test
