@@ -7,6 +7,7 @@ without (``modal.mixing.MIXED_LOSS``, the note ``run`` and ``lsce`` give such a 
     python benchmarks/validation.py --jobs 2 --tyre car --out c.jsonl
     python benchmarks/validation.py --jobs 2 --tyre car --held-out-levels 12 --out ch.jsonl
     python benchmarks/mixed_completeness.py m.jsonl h.jsonl c.jsonl ch.jsonl
+    python benchmarks/mixed_completeness.py --note-only m.jsonl ...   # whether the note fired only
 
 Each case is simulated again (seeded: the same truth) for its truth modes' peaks: a mode's
 peak is max over channels and points of |φ_tread φ_channel| / (2ζ), the receptance-like
@@ -53,8 +54,19 @@ def peaks(case_dict: dict) -> list[tuple]:
     return out
 
 
-def main(paths) -> int:
+def main(paths, note_only: bool = False) -> int:
     recs = [r for p in paths for r in map(json.loads, Path(p).read_text().splitlines()) if r.get("status") == "ok"]
+    fired = [r for r in recs if "orders_mix" in r]  # (runs since session 45 record whether the note fired)
+    if fired:
+        mass = [r for r in fired if "mass" in r["case"]["physics"]]
+        plain = [r for r in fired if "mass" not in r["case"]["physics"]]
+        print(f"the note (orders_mix): fired in {sum(r['orders_mix'] for r in mass)} of {len(mass)} tests with a mass, "
+              f"{sum(r['orders_mix'] for r in plain)} of {len(plain)} without")
+        for r in fired:
+            if r["orders_mix"] != ("mass" in r["case"]["physics"]):
+                print(f"  {'false alarm' if r['orders_mix'] else 'silent'}: {r['name']}")
+    if note_only:
+        return 0
     with ProcessPoolExecutor(2) as ex:
         all_peaks = list(ex.map(peaks, [r["case"] for r in recs]))
     counts = {k: np.zeros((len(BINS) - 1, 2), int) for k in ("mass", "no mass")}
@@ -80,4 +92,5 @@ def main(paths) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main(sys.argv[1:]))
+    args = [a for a in sys.argv[1:] if a != "--note-only"]
+    raise SystemExit(main(args, note_only="--note-only" in sys.argv[1:]))

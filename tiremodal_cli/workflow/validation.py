@@ -319,5 +319,6 @@ def run_case(case: Case, workdir) -> dict:
                set_aside=len(diag.get("set_aside_before", [])),
                detectable_parts=det_parts,
                diagnosis_right=diagnosis_right(case.physics, adopted, det_parts or det["detectable"]),
+               orders_mix=bool(summary.get("orders_mix")),
                verdict=diag.get("verdict", ""))
     return rec
