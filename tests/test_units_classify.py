@@ -229,6 +229,35 @@ def test_an_unreadable_mode_out_of_order_is_read_on_the_other_branch():
     assert [c.n for c in res[:7]] == [1, 2, 3, 4, 5, 6, 8] and [c.n for c in res[8:]] == [0, 1, 2, 3, 4]
 
 
+@pytest.mark.parametrize("seven_seen", [False, True])
+def test_an_unreadable_mode_beside_a_clear_one_of_its_order_is_read_on_the_other_branch(seven_seen):
+    """12 points. In-phase branch n = 1 … 6 at 40 … 90 Hz and n = 8 at 300 Hz (spatial 4);
+    anti-phase n = 0 … 5 at 180 … 230 Hz. A mode at 222 Hz with true n = 7 in phase (spatial
+    5), its sidewall in quadrature (branch confidence 0.1, read "anti-phase"), lies in the
+    anti-phase branch's order and 3.5 % below its clear n = 5: read there, it would be that
+    mode's split partner. On the in-phase branch only n = 7 of its alias class {5, 7, 17, 19,
+    29} fits the dispersion, so it is read there (the ring coupling + mass's in-phase n = 22 at
+    292.5 Hz, read as the partner of the anti-phase n = 12 at 307.1 Hz, 4.8 % away, at branch
+    confidence 0.06, where the mass splits its neighbours' pairs by 0.5–0.8 %). When the
+    in-phase branch holds a clear n = 7 (at 100 Hz) no order fits there, and the mode stays the
+    anti-phase n = 5's partner. (Where the orders mix: ``mixed``, a lumped mass splitting the
+    pairs.)"""
+    th = _grid(12)
+    modes = ([(n, 0.5) for n in range(1, 7)] + [(8, 0.5)] + ([(7, 0.5)] if seven_seen else [])
+             + [(n, -0.5) for n in range(6)] + [(7, -0.1 + 1j)])
+    f = ([40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 300.0] + ([100.0] if seven_seen else [])
+         + [180.0, 190.0, 200.0, 210.0, 220.0, 230.0, 222.0])
+    res = classify(f, _shapes(th, modes), th, LOCS, mixed=True)
+    odd, n5 = res[-1], res[-2]
+    assert odd.branch_confidence < 0.5 and odd.n_spatial == 5
+    if seven_seen:
+        assert (odd.n, odd.branch) == (5, "opposite") and odd.pair is not None and odd.pair == n5.pair
+    else:
+        assert (odd.n, odd.branch, odd.aliased, odd.in_order) == (7, "same", True, True)
+        assert n5.pair is None
+    assert [c.n for c in res[:7]] == [1, 2, 3, 4, 5, 6, 8]
+
+
 @pytest.mark.parametrize("sig, reread", [(0.01, True), (0.5, False)])
 def test_a_weak_mode_out_of_order_is_read_on_the_other_branch_whatever_its_branch_confidence(sig, reread):
     """The set-up above, but the 100 Hz mode's sidewall reads clearly "opposite" (ratio

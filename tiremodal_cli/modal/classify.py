@@ -138,7 +138,7 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
                                  mixed=mixed))
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
     reads = _partners_branches(freq_hz, reads, ns)
-    reads = _other_branch(freq_hz, reads, ns, in_order, n_p, significance)
+    reads = _other_branch(freq_hz, reads, ns, in_order, n_p, significance, mixed)
     pairs = _split_pairs(freq_hz, reads, ns, in_order)
     on_branch = [o.sure and (in_order[r] or ns[r] == o.n_spatial) for r, o in enumerate(reads)]
     crowd = crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads],
@@ -227,7 +227,7 @@ def _partners_branches(freq_hz, reads: list[Reading], ns: list[int]) -> list[Rea
 
 
 def _other_branch(freq_hz, reads: list[Reading], ns: list[int], in_order, n_points: int,
-                  significance=None) -> list[Reading]:
+                  significance=None, mixed: bool = False) -> list[Reading]:
     """A mode whose branch cannot be read and that is out of the order of the branch it was
     read on is read on the other branch, when exactly one order of its alias class
     (k N ± n_s, k ≤ 2) fits that branch's dispersion: no clear mode of the branch holds that
@@ -244,13 +244,28 @@ def _other_branch(freq_hz, reads: list[Reading], ns: list[int], in_order, n_poin
     n = 55 at 344.7 Hz, 0.4 % of its band's response on the flank of the opposite n = 13 of
     its order group, reads "opposite" at confidence 0.60). Such a mode out of order was
     dropped as a misread (:mod:`~tiremodal_cli.modal.misreads`) whatever the other branch
-    held. Measured: docs/lsce.md, "Session 34"."""
+    held. Measured: docs/lsce.md, "Session 34".
+
+    Since session 46, where the orders mix (``mixed``: a lumped mass splits the pairs), also a
+    mode whose branch cannot be read that lies in the order of the branch it was read on,
+    where a clear mode of the branch holds its order: read there it is that mode's split
+    partner, which its branch reading does not support; it is read on the other branch where
+    one order fits (the ring coupling + mass's in-phase n = 22 at 292.5 Hz, read at confidence
+    0.06 as the partner of the anti-phase n = 12 at 307.1 Hz, 4.8 % away, where the mass splits
+    its neighbours' pairs by 0.5–0.8 %). A true partner whose branch cannot be read stays one
+    unless the other branch has a place for it. Not on a structure symmetric about its
+    sensors: there a second mode of a held order is no split partner and is dropped as a blend
+    (:mod:`~tiremodal_cli.modal.misreads`) — read on the other branch instead, it was kept
+    (measured: a held-out car ring's 769.9 Hz row, 0.3 % of the response, became a spurious
+    in-phase n = 45)."""
     reads = list(reads)
     weak = np.zeros(len(reads), dtype=bool) if significance is None else \
         np.asarray(significance, dtype=float) < MISREAD_MAX_SIGNIFICANCE
     for r in range(len(reads)):
         o = reads[r]
-        if (o.branch_confidence >= 0.5 and not weak[r]) or in_order[r] or o.branch not in (SAME, OPPOSITE):
+        held = mixed and any(q != r and reads[q].sure and reads[q].branch == o.branch and ns[q] == ns[r]
+                             for q in range(len(reads)))
+        if (o.branch_confidence >= 0.5 and not weak[r]) or (in_order[r] and not held) or o.branch not in (SAME, OPPOSITE):
             continue
         other = OPPOSITE if o.branch == SAME else SAME
         clear = [q for q in range(len(reads)) if q != r and reads[q].branch == other and reads[q].sure]
