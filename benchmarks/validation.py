@@ -931,6 +931,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | **1311** / 1334 (98 %) | 5 / 1863 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-12-07, session 44, on an AMD EPYC | the crowd test leaves out of the anti-phase branch's dispersion a point its rise cannot hold (crowds); crowd rows testify that an n = 1 row beside them is a flat branch's, no cavity (diagnose.cavity) — both made for the car tyre ("Another tyre" above): unchanged case by case against a85d870, fits included | paper | 1173 / 1182 (99 %) | 6 / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 5.5 min (`--jobs 2`) |
 | | | ring | 1311 / 1334 (98 %) | 5 / 1865 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-12-07, session 46, on an AMD EPYC | where the orders mix, a mode whose branch cannot be read, beside a clear mode of its order and branch, is read on the other branch where exactly one order fits (classify; the code of 656a5a7): the coupling + mass's in-phase n = 22 found | paper | 1173 / 1182 (99 %) | 6 / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 6.6 min (`--jobs 2`) |
+| | | ring | **1312** / 1334 (98 %) | 5 / 1865 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
