@@ -763,6 +763,24 @@ mislabelled 6 → **1**, aliased read right 337 → **342** / 345, spurious 18 /
 three cancelling rows at 152–159 Hz among them); paper unchanged. The matrix, the car's
 matrix and the draw 7000: unchanged case by case.
 
+**Session 46: a fourth draw** (`--held-out-seed 11000`, never seen, run once at 06c91f1 —
+session 45's last code — before anything was looked at, then at 51e9b92):
+
+| run | code | generator | found / expected | mislabelled | spurious / adopted | cases over 5 % | aliased read right | diagnoses right |
+|---|---|---|---|---|---|---|---|---|
+| held-out draw 11000 | 06c91f1 | paper | 612 / 661 (93 %) | 8 | 8 / 788 (1.0 %) | 1 (4 / 64) | 251 / 251 | 8 / 8 |
+| | | ring | 601 / 607 (99 %) | 2 | 13 / 809 (1.6 %) | 1 (5 / 66) | 189 / 190 | 6 / 8 |
+| | 51e9b92 | paper | 612 / 661 (93 %) | 8 | 8 / 788 (1.0 %) | 1 (4 / 64) | 251 / 251 | 8 / 8 |
+| | | ring | 601 / 607 (99 %) | 2 | 13 / 809 (1.6 %) | 1 (5 / 66) | **190** / 190 | 6 / 8 |
+
+The paper's misses are the 60-point membrane + mass (1,600 Hz, receptance, faults: 44 / 72,
+7 mislabelled) and the 20-point membrane + cavity (4,096 Hz, 1 s, faults: 56 / 72, the case
+over 5 %); the ring's case over 5 % is the 20-point rim + mass, whose diagnosis is wrong with
+either code (`m_w` and `tangential`, then `added_mass` and `tangential`; the rim fixture
+missed), as is the 60-point extensible belt + rim's (`tangential` adopted beside the belt).
+The session's re-reading of unreadable split partners changed no count here; the orders-mix
+note fired in both tests with a mass and in none of the other 22.
+
 """
 
 
