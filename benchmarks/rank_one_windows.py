@@ -4,7 +4,11 @@ class needs, not a pass of the tool (docs/lsce.md, "Session 47").
 
     python benchmarks/validation.py --only 'ring:physics=sidewall_coupling+mass' --keep /tmp/k --no-docs --out /tmp/k.jsonl
     python benchmarks/rank_one_windows.py /tmp/k 'ring:physics=sidewall_coupling+mass' [--start truth:0.002]
-        [--nulls 3] [--oracle-pairs] [--lo HZ --hi HZ]
+        [--nulls 3] [--oracle-pairs] [--free-half-widths 0.3] [--lo HZ --hi HZ]
+
+(``RANK_ONE_MAX_NFEV`` sets the solver's evaluations per fit, 50 by default. Run one process
+per core with ``OMP_NUM_THREADS=1``: two processes with default BLAS threads on two cores ran
+10–20 × slower.)
 
 *The model.* In the points' circumferential harmonics (the complete grid's cos kθ, sin kθ,
 normalised: an orthonormal transform, so white noise stays white), every FRF row (channel c,
@@ -39,6 +43,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import os
 import sys
 from pathlib import Path
 
@@ -61,6 +66,8 @@ WINDOW_HALF_WIDTHS = 4.0
 #: the table's poles moved with the proposal: those within this many half-widths of it (0: every
 #: pole inside the window's lines; measured worse: the fit stops in local minima, gains < 0)
 FREE_HALF_WIDTHS = 0.3
+#: the solver's function evaluations per fit (each evaluation one linear solve per harmonic pattern)
+MAX_NFEV = int(os.environ.get("RANK_ONE_MAX_NFEV", 50))
 BOX_HALF_WIDTHS = 0.5
 FORM_Q = {"receptance": 0, "mobility": 1, "accelerance": 2}
 
@@ -168,7 +175,8 @@ class RankOne:
                 J[1, :, ks, :, j] = P[n_c * K:].reshape(n_c, K, len(ks)).transpose(2, 0, 1)
         return J.reshape(-1, th.size)
 
-    def solve(self, max_nfev=50):
+    def solve(self, max_nfev=None):
+        max_nfev = max_nfev or MAX_NFEV
         npf = self.fp.size
         nL = self.x0().size - 2 * npf
         lb = np.concatenate([np.full(npf, -self.box), np.full(npf, -np.log(3)), np.full(nL, -np.inf)])
