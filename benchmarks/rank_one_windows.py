@@ -69,6 +69,8 @@ FREE_HALF_WIDTHS = 0.3
 #: the solver's function evaluations per fit (each evaluation one linear solve per harmonic pattern)
 MAX_NFEV = int(os.environ.get("RANK_ONE_MAX_NFEV", 50))
 BOX_HALF_WIDTHS = 0.5
+#: with every pole of the window free (``--free-half-widths 0``), the table's poles' box
+TABLE_BOX_HALF_WIDTHS = float(os.environ.get("RANK_ONE_TABLE_BOX", 0.5))
 FORM_Q = {"receptance": 0, "mobility": 1, "accelerance": 2}
 
 
@@ -179,12 +181,13 @@ class RankOne:
         max_nfev = max_nfev or MAX_NFEV
         npf = self.fp.size
         nL = self.x0().size - 2 * npf
-        lb = np.concatenate([np.full(npf, -self.box), np.full(npf, -np.log(3)), np.full(nL, -np.inf)])
+        box = np.broadcast_to(np.asarray(self.box, dtype=float), (npf,))
+        lb = np.concatenate([-box, np.full(npf, -np.log(3)), np.full(nL, -np.inf)])
         sol = scipy.optimize.least_squares(self.residual, self.x0(), jac=self.jac, bounds=(lb, -lb),
                                            x_scale="jac", max_nfev=max_nfev, method="trf")
         s, L = self.unpack(sol.x)
         r = self.residual(sol.x)
-        edge = float(np.max(np.abs(sol.x[:npf]))) / self.box if npf else 0.0
+        edge = float(np.max(np.abs(sol.x[:npf]) / box)) if npf else 0.0
         return s, L, float(r @ r), edge
 
 
@@ -274,10 +277,11 @@ def window_test(r, Hh, names, s_all, f_c, z_c, groups, extra=(), free_half_width
     free = np.flatnonzero(np.abs(s0.imag / TAU - f_c) <= free_half_widths * (-s0.real / TAU)) if free_half_widths \
         else np.flatnonzero((s0.imag / TAU >= lo) & (s0.imag / TAU <= hi))
     L0 = initial_participation(freq, Y, s0, allowed, q)
-    s_h0, L0, _, _ = RankOne(freq, Y, s0, allowed, q, L0, free).solve()
+    tbox = TABLE_BOX_HALF_WIDTHS if not free_half_widths else BOX_HALF_WIDTHS
+    s_h0, L0, _, _ = RankOne(freq, Y, s0, allowed, q, L0, free, tbox).solve()
     res = RankOne(freq, Y, s_h0, allowed, q, L0, [])._inner(s_h0, L0)[3]
     Y = Y / np.sqrt(np.mean(np.abs(res) ** 2, axis=(1, 2)))[:, None, None]
-    s_h0, L0, E0, _ = RankOne(freq, Y, s_h0, allowed, q, L0, free).solve()
+    s_h0, L0, E0, _ = RankOne(freq, Y, s_h0, allowed, q, L0, free, tbox).solve()
     w = TAU * f_c
     sc = complex(-z_c * w, w * np.sqrt(1 - z_c**2))
     out = []
@@ -285,7 +289,9 @@ def window_test(r, Hh, names, s_all, f_c, z_c, groups, extra=(), free_half_width
         cand = np.array([nm[0] == g for nm in names])
         s1, al1 = np.append(s_h0, sc), np.vstack([allowed, cand[None]])
         L1 = np.vstack([L0, initial_participation(freq, Y, s1, al1, q)[-1:]])
-        s_h1, L1, E1, edge = RankOne(freq, Y, s1, al1, q, L1, np.append(free, s1.size - 1)).solve()
+        box = np.append(np.full(free.size, TABLE_BOX_HALF_WIDTHS if not free_half_widths else BOX_HALF_WIDTHS),
+                        BOX_HALF_WIDTHS)
+        s_h1, L1, E1, edge = RankOne(freq, Y, s1, al1, q, L1, np.append(free, s1.size - 1), box).solve()
         edge = float(abs(s_h1[-1].imag - sc.imag) / (BOX_HALF_WIDTHS * -sc.real))
         p1 = 2 * al1.sum() + 4 * Y.shape[0] * Y.shape[1] + 2 * L1.size
         sig2 = E1 / (2 * Y.size - p1)
