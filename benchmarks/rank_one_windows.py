@@ -69,6 +69,10 @@ FREE_HALF_WIDTHS = 0.3
 #: the solver's function evaluations per fit (each evaluation one linear solve per harmonic pattern)
 MAX_NFEV = int(os.environ.get("RANK_ONE_MAX_NFEV", 50))
 BOX_HALF_WIDTHS = 0.5
+#: with ``RANK_ONE_SHOWN`` > 0, each table mode's shape is free only on the harmonics where its
+#: peak reaches that many times the window's residual level (the poly-reference bound's model
+#: uses the noise's: ``crlb_polyref.py``); 0, on every harmonic
+SHOWN_LEVEL = float(os.environ.get("RANK_ONE_SHOWN", 0))
 #: with every pole of the window free (``--free-half-widths 0``), the table's poles' box
 TABLE_BOX_HALF_WIDTHS = float(os.environ.get("RANK_ONE_TABLE_BOX", 0.5))
 FORM_Q = {"receptance": 0, "mobility": 1, "accelerance": 2}
@@ -282,6 +286,13 @@ def window_test(r, Hh, names, s_all, f_c, z_c, groups, extra=(), free_half_width
     res = RankOne(freq, Y, s_h0, allowed, q, L0, [])._inner(s_h0, L0)[3]
     Y = Y / np.sqrt(np.mean(np.abs(res) ** 2, axis=(1, 2)))[:, None, None]
     s_h0, L0, E0, _ = RankOne(freq, Y, s_h0, allowed, q, L0, free, tbox).solve()
+    if SHOWN_LEVEL:  # each table mode free only on the harmonics it shows (the bound's model)
+        psi = RankOne(freq, Y, s_h0, allowed, q, L0, [])._inner(s_h0, L0)[2]
+        peak = np.abs(L0).max(axis=1)[:, None] * np.abs(psi) * (np.abs(s_h0) ** q / -s_h0.real)[:, None]
+        shown = peak >= SHOWN_LEVEL
+        shown[np.arange(s_h0.size), np.argmax(peak, axis=1)] = True
+        allowed = allowed & shown
+        s_h0, L0, E0, _ = RankOne(freq, Y, s_h0, allowed, q, L0, free, tbox).solve()
     w = TAU * f_c
     sc = complex(-z_c * w, w * np.sqrt(1 - z_c**2))
     out = []
