@@ -73,6 +73,9 @@ BOX_HALF_WIDTHS = 0.5
 #: peak reaches that many times the window's residual level (the poly-reference bound's model
 #: uses the noise's: ``crlb_polyref.py``); 0, on every harmonic
 SHOWN_LEVEL = float(os.environ.get("RANK_ONE_SHOWN", 0))
+#: a round-2 row closer than this share of its half-width to a table row is that row's duplicate
+#: (the summary's count; chosen, not derived: 2.5 lines at ζ = 2 % and 500 Hz)
+GUARD_HALF_WIDTHS = 0.25
 #: with every pole of the window free (``--free-half-widths 0``), the table's poles' box
 TABLE_BOX_HALF_WIDTHS = float(os.environ.get("RANK_ONE_TABLE_BOX", 0.5))
 FORM_Q = {"receptance": 0, "mobility": 1, "accelerance": 2}
@@ -312,10 +315,12 @@ def window_test(r, Hh, names, s_all, f_c, z_c, groups, extra=(), free_half_width
     return out
 
 
-def truth_of(case_name, tyre, r):
-    """{(n, branch): f} of the case's truth modes; the strong modes' poles (tread amplitude > 0.05)."""
-    from validation import matrix
-    c = next(c for c in matrix(tyre=tyre) if c.name == case_name)
+def truth_of(case_name, tyre, r, seed=None):
+    """{(n, branch): f} of the case's truth modes; the strong modes' poles (tread amplitude > 0.05);
+    every truth frequency. ``seed``: a held-out draw of ``validation.held_out_levels``."""
+    from validation import held_out_levels, matrix
+    cases = matrix(tyre=tyre) if seed is None else held_out_levels(12, seed=seed, tyre=tyre)
+    c = next(c for c in cases if c.name == case_name)
     cfg = config_for(c)
     sim = simulate(cfg)
     tread = next(ch.name for ch in cfg.channels if ch.location == "tread")
@@ -325,7 +330,8 @@ def truth_of(case_name, tyre, r):
         if np.abs(phi[0] if phi.ndim > 1 else phi).max() > 0.05:
             w, z = TAU * m["frequency_hz"], m["damping_ratio"]
             strong.append(complex(-z * w, w * np.sqrt(1 - z**2)) - (1 / r.exp_tau_s if r.exp_tau_s else 0))
-    return {(m["n"], m["branch"]): m["frequency_hz"] for m in sim.truth["modes"]}, np.array(strong)
+    return ({(m["n"], m["branch"]): m["frequency_hz"] for m in sim.truth["modes"]}, np.array(strong),
+            np.array([m["frequency_hz"] for m in sim.truth["modes"]]))
 
 
 def main(argv=None):
@@ -335,6 +341,8 @@ def main(argv=None):
     ap.add_argument("--tyre", default="gl073a")
     ap.add_argument("--start", default="dispersion", help="dispersion, or truth:OFFSET")
     ap.add_argument("--nulls", type=int, default=3)
+    ap.add_argument("--seed", type=int, default=None, help="a held-out draw's seed (validation.py --held-out-seed)")
+    ap.add_argument("--guard", type=float, default=GUARD_HALF_WIDTHS)
     ap.add_argument("--oracle-pairs", action="store_true")
     ap.add_argument("--free-half-widths", type=float, default=FREE_HALF_WIDTHS)
     ap.add_argument("--lo", type=float, default=0.0)
@@ -345,7 +353,7 @@ def main(argv=None):
     Hh, names = harmonics(r)
     N = len(r.point_angle)
     grp = lambda n: min(n % N, N - n % N)  # noqa: E731
-    truth, strong = truth_of(a.case, a.tyre, r)
+    truth, strong, every = truth_of(a.case, a.tyre, r, a.seed)
     if a.oracle_pairs:
         f_all = s_all.imag / TAU
         add = [s for s in strong if np.min(np.abs(f_all - s.imag / TAU)) > r.freq_hz[1] - r.freq_hz[0]
@@ -361,7 +369,7 @@ def main(argv=None):
             abs(ft - f) <= 3 * z * f and grp(nt) == g for (nt, _), ft in truth.items())]
         nulls = list(rng.choice(empty, size=min(a.nulls, len(empty)), replace=False)) if empty else []
         res = window_test(r, Hh, names, s_all, f, z, [grp(n)] + nulls, free_half_widths=a.free_half_widths)
-        t, x = truth.get((n, br)), res[0]
+        t, x = truth.get((n, br), np.nan), res[0]  # (an order the generator does not list: nan)
         null_gains += [y["gain"] for y in res[1:]]
         print(f"n={n:3d} {br:8s} start {f:8.2f} truth {t:8.2f} fit {x['f']:8.2f} ({100 * (x['f'] - t) / t:+.2f} %) "
               f"gain {x['gain']:7.1f} edge {x['edge']:.2f} | nulls " + " ".join(f"{y['gain']:.1f}" for y in res[1:]),
@@ -371,12 +379,40 @@ def main(argv=None):
             passed.append((n, br, z, complex(-x["z"] * w, w * np.sqrt(1 - x["z"] ** 2)), grp(n)))
     if null_gains:
         print(f"nulls: {len(null_gains)}, over 1: {sum(g > 1 for g in null_gains)}, max {max(null_gains):.1f}")
+    final = []
     for i, (n, br, z, s, g) in enumerate(passed):  # round 2: every other passed proposal in the model
         x = window_test(r, Hh, names, s_all, s.imag / TAU, z, [g], [p[3:] for j, p in enumerate(passed) if j != i],
                         a.free_half_widths)[0]
-        t = truth.get((n, br))
+        t = truth.get((n, br), np.nan)
         print(f"round 2 n={n:3d} {br:8s} truth {t:8.2f} fit {x['f']:8.2f} ({100 * (x['f'] - t) / t:+.2f} %) "
               f"gain {x['gain']:7.1f} edge {x['edge']:.2f}", flush=True)
+        final.append((n, br, x, t))
+    summary(final, s_all, truth, every, rows, a.guard)
+
+
+def summary(final, s_table, truth, every, rows, guard):
+    """What round 2's rows would do to the ruler's counts: a row is added when it passes and lies
+    more than ``guard`` of its half-width from every table row (closer, it is a strong mode's
+    duplicate: the weak mode cannot be told from it); it then finds its order (its truth within
+    0.3 %, and no table row already does), stands for another truth mode only (within 0.3 % of
+    another: not spurious to the ruler, wrong all the same) or is spurious (no truth within 0.3 %)."""
+    f_tab = s_table.imag / TAU
+    held = [float(m["frequency_hz"]) for m in rows]
+    out = {"added": [], "finds": [], "already": [], "other_truth": [], "spurious": [], "duplicates": []}
+    for n, br, x, t in final:
+        if not (x["gain"] > 1 and x["edge"] < 0.9):
+            continue
+        if np.min(np.abs(f_tab - x["f"])) <= guard * x["z"] * x["f"]:
+            out["duplicates"].append(n)
+            continue
+        out["added"].append(n)
+        if t and abs(x["f"] / t - 1) <= 0.003:
+            out["already" if any(abs(h / t - 1) <= 0.003 for h in held) else "finds"].append(n)
+        elif np.any(np.abs(every / x["f"] - 1) <= 0.003):
+            out["other_truth"].append(n)
+        else:
+            out["spurious"].append(n)
+    print("summary " + " ".join(f"{k}={v}" for k, v in out.items()), flush=True)
 
 
 if __name__ == "__main__":
