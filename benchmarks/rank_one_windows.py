@@ -265,6 +265,21 @@ def proposals(rows, band, truth, offset):
     return sorted(out)
 
 
+def missed_proposals(record, rows, band, offset):
+    """(f, n, branch, ζ) of every mode the validation record (one line of validation.py's
+    ``--out``) scores missed or mislabelled, at its truth × (1 + offset), with its branch's median
+    table damping: what the joint fit could do from a good start where no dispersion reaches."""
+    out = []
+    for d in record["detail"]:
+        if d["status"] == "missed" or d["status"].startswith("mislabelled"):
+            zs = [float(m["damping_ratio"]) for m in rows if m["branch"] == d["branch"]]
+            z = float(np.median(zs)) if zs else 0.02
+            f = d["frequency_hz"] * (1 + offset)
+            if band[0] < f * (1 - WINDOW_HALF_WIDTHS * z) and f * (1 + WINDOW_HALF_WIDTHS * z) < band[1]:
+                out.append((f, int(d["n"]), d["branch"], z))
+    return sorted(out)
+
+
 def window_test(r, Hh, names, s_all, f_c, z_c, groups, extra=(), free_half_widths=FREE_HALF_WIDTHS):
     """The proposal at ``f_c`` tested in each order group of ``groups`` (module doc): a list of
     dict(g, gain, f, z, edge)."""
@@ -343,6 +358,8 @@ def main(argv=None):
     ap.add_argument("--nulls", type=int, default=3)
     ap.add_argument("--seed", type=int, default=None, help="a held-out draw's seed (validation.py --held-out-seed)")
     ap.add_argument("--guard", type=float, default=GUARD_HALF_WIDTHS)
+    ap.add_argument("--record", help="validation.py --out file: propose the case's missed modes instead "
+                                     "(at the truth × (1 + the --start truth: offset))")
     ap.add_argument("--oracle-pairs", action="store_true")
     ap.add_argument("--free-half-widths", type=float, default=FREE_HALF_WIDTHS)
     ap.add_argument("--lo", type=float, default=0.0)
@@ -361,7 +378,14 @@ def main(argv=None):
         print("oracle: the truth's strong modes no row stands for:", sorted(round(s.imag / TAU, 2) for s in add))
         s_all = np.concatenate([s_all, add])
     offset = float(a.start.split(":")[1]) if a.start.startswith("truth:") else None
-    props = [p for p in proposals(rows, (r.freq_hz[1], r.freq_hz[-1]), truth, offset) if a.lo <= p[0] <= a.hi]
+    band = (r.freq_hz[1], r.freq_hz[-1])
+    if a.record:  # the ruler's misses of this case, from a good start
+        import json
+        rec = next(json.loads(line) for line in open(a.record) if json.loads(line)["name"] == a.case)
+        props = missed_proposals(rec, rows, band, offset or 0.0)
+    else:
+        props = proposals(rows, band, truth, offset)
+    props = [p for p in props if a.lo <= p[0] <= a.hi]
     passed, null_gains = [], []
     rng = np.random.default_rng(0)
     for f, n, br, z in props:
