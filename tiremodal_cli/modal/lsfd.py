@@ -74,7 +74,7 @@ def synthesize(freq_hz, residues, s, *, form="accelerance", lower=None, upper=No
 
 
 def lsfd(freq_hz, H, s, *, form: str = "accelerance", lower: bool = True, upper: bool = True,
-         fast: bool = False) -> LSFDResult:
+         fast: bool = False, weight=None) -> LSFDResult:
     """Fit residues and residual terms of all FRFs for the poles ``s``.
 
     Parameters
@@ -86,6 +86,9 @@ def lsfd(freq_hz, H, s, *, form: str = "accelerance", lower: bool = True, upper:
     fast : bool
         Solve the normal equations (Cholesky) and skip the re-synthesis: for the many small
         fits of a stabilization sweep, where only the shapes' MAC matters.
+    weight : (K,) array, optional
+        Each line's weight (1 / its noise's RMS): weighted least squares; the synthesis
+        and fit error are of the unweighted FRFs.
     """
     q = FORM_POWER[form]
     freq_hz = np.asarray(freq_hz, dtype=float)
@@ -93,9 +96,12 @@ def lsfd(freq_hz, H, s, *, form: str = "accelerance", lower: bool = True, upper:
     n_m = len(s)
     A = pole_basis(freq_hz, s, q, lower, upper)
     Ar = np.concatenate([A.real, A.imag], axis=0)
+    Y = np.concatenate([H.real, H.imag], axis=1).T  # (2K, n_frf)
+    if weight is not None:
+        w2 = np.tile(np.asarray(weight, dtype=float), 2)[:, None]
+        Ar, Y = Ar * w2, Y * w2
     scale = np.linalg.norm(Ar, axis=0)
     scale[scale == 0] = 1
-    Y = np.concatenate([H.real, H.imag], axis=1).T  # (2K, n_frf)
     As = Ar / scale
     x = None
     if fast:
@@ -154,14 +160,15 @@ def significance(freq_hz, H, residues, s, *, form="accelerance") -> np.ndarray:
     return out
 
 
-def lsfd_participation(freq_hz, Y, s, L, *, form: str = "accelerance"):
+def lsfd_participation(freq_hz, Y, s, L, *, form: str = "accelerance", weight=None):
     """LSFD with known participation factors (poly-reference).
 
     ``Y`` (n_out, n_ref, K): FRFs from every reference to every output; mode r has
     residues ψ_or L_r (L from the estimator, (n_modes, n_ref)), so each output has one
     complex unknown per mode plus real lower/upper residuals per reference. Two close
     poles with different participation stay apart, where a free residue per FRF would
-    trade them off against each other.
+    trade them off against each other. ``weight`` ((K,), optional): each line's weight,
+    as :func:`lsfd`'s.
 
     Returns
     -------
@@ -185,10 +192,13 @@ def lsfd_participation(freq_hz, Y, s, L, *, form: str = "accelerance"):
         resid[h * K:(h + 1) * K, 2 * h + 1] = jw[:, 0] ** q
     A = np.concatenate([A_modes, resid], axis=1)
     Ar = np.concatenate([A.real, A.imag], axis=0)
-    scale = np.linalg.norm(Ar, axis=0)
-    scale[scale == 0] = 1
     Yc = Y.reshape(n_out, n_ref * K).T  # (n_ref K, n_out)
     Yr = np.concatenate([Yc.real, Yc.imag], axis=0)
+    if weight is not None:
+        w2 = np.tile(np.asarray(weight, dtype=float), 2 * n_ref)[:, None]
+        Ar, Yr = Ar * w2, Yr * w2
+    scale = np.linalg.norm(Ar, axis=0)
+    scale[scale == 0] = 1
     x = scipy.linalg.lstsq(Ar / scale, Yr, lapack_driver="gelsy")[0] / scale[:, None]
     m = s.shape[1]
     psi = (x[:m] + 1j * x[m:2 * m]).T  # (n_out, m)
