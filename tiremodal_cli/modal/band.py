@@ -16,7 +16,7 @@ from tiremodal_cli.errors import DataFormatError, ParameterError
 log = logging.getLogger(__name__)
 
 __all__ = ["COHERENCE_ALPHA", "FORCE_DROP_DB", "coherence_threshold", "default_band", "band_or_every_line",
-           "order_for_lines", "no_stable_mode", "live_channels"]
+           "order_for_lines", "no_stable_mode", "live_channels", "noise_shape"]
 
 
 #: probability that a line of pure noise passes the coherence test in one FRF
@@ -176,3 +176,28 @@ def live_channels(freq_hz, H) -> np.ndarray:
         raise DataFormatError(f"FRF of channel {np.flatnonzero(live)[c] + 1}, point {p + 1} has a non-finite "
                               f"value at {freq_hz[k]:g} Hz")
     return live
+
+
+def noise_shape(force_autospectrum, n_averages=None) -> np.ndarray | None:
+    """How the FRFs' noise variance varies over the lines, relative: (n_freq,) or None.
+
+    A response sensor's noise floor N (white: an accelerometer's, and the simulator's)
+    reaches the H1 estimate Σ X F* / Σ |F|² of a point as an error of variance
+    σ_N² / (n_d G_FF(f)), G_FF the mean force autospectrum over the point's n_d hits: where
+    the hammer's spectrum falls (towards the band's top, at a double hit's notches) the FRF
+    is noisier in proportion. An order group's rows are the points' FRFs combined with
+    weights of one modulus over the grid (the spatial DFT), so each row's noise variance
+    at a line is proportional to the mean over the points of 1 / (n_d G_FF). The value is
+    relative (the noise tests scale it by each row's residual level); None without a force
+    spectrum (FRFs read from UFF 58): the noise is then taken as white over the band.
+
+    force_autospectrum : (n_points, n_freq) array, N², or None ; n_averages : (n_points,)
+    """
+    if force_autospectrum is None:
+        return None
+    g = np.asarray(force_autospectrum, dtype=float).reshape(-1, np.shape(force_autospectrum)[-1])
+    n_d = np.ones(g.shape[0]) if n_averages is None else np.maximum(np.asarray(n_averages, float).ravel(), 1)
+    if n_d.size != g.shape[0] or not np.all(np.isfinite(g)) or g.max(initial=0) <= 0:
+        return None
+    g = np.maximum(g, g.max() * 1e-12)  # an exact zero of the force (a notch): noise without bound, held finite
+    return np.mean(1.0 / (n_d[:, None] * g), axis=0)

@@ -17,7 +17,8 @@ from threadpoolctl import threadpool_limits
 from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.errors import DataFormatError, ParameterError
 from tiremodal_cli.frf.windows import correct_poles
-from tiremodal_cli.modal.band import band_or_every_line, default_band, live_channels, no_stable_mode, order_for_lines
+from tiremodal_cli.modal.band import (band_or_every_line, default_band, live_channels, no_stable_mode, noise_shape,
+                                      order_for_lines)
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.gaps import cleaned_groups, weak_in_frfs
 from tiremodal_cli.modal.groupfit import GroupData
@@ -100,6 +101,8 @@ class _Band:
 
     live : (n_channels,) bool ; lines : (n_freq,) bool, the band's lines ; freq : (K,) Hz
     to_acc : (K,) complex, the factor from the given form ; Hb : (n_live, n_points, K)
+    noise : (K,) the FRFs' noise variance per line in accelerance, relative (median 1;
+    :func:`~tiremodal_cli.modal.band.noise_shape`), or None (white)
     """
 
     live: np.ndarray
@@ -107,6 +110,7 @@ class _Band:
     freq: np.ndarray
     to_acc: np.ndarray
     Hb: np.ndarray
+    noise: np.ndarray | None = None
 
     @property
     def flat(self) -> np.ndarray:
@@ -115,7 +119,7 @@ class _Band:
 
 def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="accelerance",
                     exp_tau_s=None, opt: ModalOptions = ModalOptions(), progress=None,
-                    channel_angle=None) -> ModalResult:
+                    channel_angle=None, noise_var=None) -> ModalResult:
     """Modal parameters of a set of FRFs.
 
     Parameters
@@ -126,6 +130,8 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     channel_location : sequence of str, optional ; channel_angle : (n_channels,) rad, optional
     form : FRF form of H
     exp_tau_s : float, optional — exponential window to correct the damping for
+    noise_var : (n_freq,) array, optional — the FRFs' noise variance per line in accelerance,
+        relative (:func:`~tiremodal_cli.modal.band.noise_shape`); None: white
     opt : ModalOptions
     progress : callable(done, total), optional
 
@@ -136,7 +142,7 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     opt.check()
     freq_hz = np.asarray(freq_hz, dtype=float)
     H = np.asarray(H)
-    band = _band_frfs(freq_hz, H, live_channels(freq_hz, H), form, opt)
+    band = _band_frfs(freq_hz, H, live_channels(freq_hz, H), form, opt, noise_var)
     spatial = opt.spatial == "on" or (opt.spatial == "auto" and point_angle is not None
                                       and is_circumferential(point_angle, channel_location))
     groups, group_max, opt = _order_groups(band, point_angle, spatial, opt)
@@ -186,7 +192,7 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
     synth = np.zeros(band.flat.shape, dtype=complex)
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
         data = GroupData(band.freq, rows, back, band.flat, "accelerance", opt, g, rows.shape[0] // band.Hb.shape[0],
-                         band.Hb.shape[0])
+                         band.Hb.shape[0], band.noise)
         out[g] = (data, group_modes(data, spatial, group_max, split=not gaps))
         if progress:
             progress(i + 1, len(groups))
@@ -224,8 +230,10 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
     return diagrams, modes, rejected, synth, kept, mixing
 
 
-def _band_frfs(freq_hz, H, live, form: str, opt: ModalOptions) -> _Band:
-    """The live FRFs on the band's lines, in accelerance.
+def _band_frfs(freq_hz, H, live, form: str, opt: ModalOptions, noise_var=None) -> _Band:
+    """The live FRFs on the band's lines, in accelerance, and their noise variance per line
+    (``noise_var``, median 1 over the band: the records are accelerations (FORMAT.md), so
+    their sensor noise is the same in accelerance whatever form the FRFs are given in).
 
     One internal form: the estimate then weighs the lines alike whatever form the FRFs come
     in (receptance's 1/ω² would let the low lines dominate and turn the high band's noise
@@ -241,7 +249,9 @@ def _band_frfs(freq_hz, H, live, form: str, opt: ModalOptions) -> _Band:
     if FORM_POWER[form] != 2 and k_lines[0] <= 0:
         raise ParameterError(f"the band of {form} FRFs must start above 0 Hz (got {k_lines[0]:g} Hz)")
     to_acc = (2j * np.pi * k_lines) ** (2 - FORM_POWER[form])
-    return _Band(live, lines, k_lines, to_acc, H[live][:, :, lines] * to_acc)
+    noise = None if noise_var is None else np.asarray(noise_var, dtype=float)[lines]
+    noise = None if noise is None else noise / np.median(noise)
+    return _Band(live, lines, k_lines, to_acc, H[live][:, :, lines] * to_acc, noise)
 
 
 def _order_groups(band: _Band, point_angle, spatial: bool, opt: ModalOptions):
@@ -353,7 +363,8 @@ def modal_table_from_frf(r, opt: ModalOptions = ModalOptions(), *, progress=None
     r, measured, mirrored = (mirror_filled(r, opt.band_hz) if is_circumferential(r.point_angle, r.channel_location)
                              else (r, None, None))
     res = estimate_modes(r.freq_hz, r.H, point_angle=r.point_angle, channel_location=r.channel_location,
-                         form=r.form, exp_tau_s=r.exp_tau_s, opt=opt, progress=progress, channel_angle=r.channel_angle)
+                         form=r.form, exp_tau_s=r.exp_tau_s, opt=opt, progress=progress, channel_angle=r.channel_angle,
+                         noise_var=noise_shape(r.force_autospectrum, r.n_averages))
     res.meta["band_reason"] = why
     res.meta["method"] = opt.method
     res, classes = _classified(res, r)

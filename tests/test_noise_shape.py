@@ -1,0 +1,117 @@
+"""The FRFs' noise over the lines: where the hammer's spectrum falls, the H1 estimate is noisier.
+
+Truth here is sampling statistics, not the package: (1) the variance of an H1 estimate
+built from seeded white sensor noise and a half-sine hammer pulse, measured by Monte
+Carlo; (2) the noise test's false-alarm rate on seeded complex Gaussian noise whose
+variance rises towards the band's top, against the α it is designed for.
+"""
+
+import numpy as np
+
+from tiremodal_cli.modal.band import noise_shape
+from tiremodal_cli.modal.groupfit import NOISE_ALPHA, _above_noise, _residual_terms_only
+from tiremodal_cli.modal.lsfd import lsfd, synthesize
+
+FREQ = np.arange(20.0, 420.0, 0.5)
+
+
+def _half_sine(f, width_s):
+    """|F(f)| of a unit half-sine pulse of ``width_s`` (its first zero at 1.5 / width)."""
+    x = 2 * f * width_s
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = np.abs(np.cos(np.pi * f * width_s) / (1 - x**2))
+    return np.where(np.isclose(x, 1), np.pi / 4, g)
+
+
+def test_h1_variance_follows_the_force_spectrum():
+    """Monte Carlo H1 over 3 hits of jittered half-sine pulses, white sensor noise: the
+    variance of Ĥ − H per line, relative, is the shape noise_shape gives (within the
+    sampling error of 4,000 draws: 5 % at 2 σ; checked over the lines where |F|² falls by
+    up to 17 dB)."""
+    rng = np.random.default_rng(3)
+    f = FREQ
+    widths = np.array([[3.0e-3, 3.1e-3, 3.2e-3], [2.9e-3, 3.05e-3, 3.15e-3]])  # (points, hits)
+    H = 1.0 / (1 + 1j * f / 150.0)
+    err = np.zeros((4000, 2, f.size), dtype=complex)
+    for k in range(err.shape[0]):
+        F = _half_sine(f[None, None, :], widths[:, :, None]) * np.exp(2j * np.pi * rng.uniform(size=(2, 3, 1)))
+        N = 0.01 * (rng.standard_normal(F.shape) + 1j * rng.standard_normal(F.shape))
+        X = H * F + N
+        err[k] = np.sum(X * np.conj(F), axis=1) / np.sum(np.abs(F) ** 2, axis=1) - H
+    measured = np.mean(np.mean(np.abs(err) ** 2, axis=0), axis=0)
+    gff = np.mean(_half_sine(f[None, None, :], widths[:, :, None]) ** 2, axis=1)
+    v = noise_shape(gff, np.array([3, 3]))
+    g = gff.mean(axis=0)
+    assert 10 * np.log10(g.max() / g.min()) > 15
+    ratio = (measured / measured.mean()) / (v / v.mean())
+    assert np.all(np.abs(ratio - 1) < 0.05), (ratio.min(), ratio.max())
+
+
+def test_noise_shape_without_a_force_spectrum_is_none():
+    assert noise_shape(None) is None
+
+
+def _noise_rows(rng, v, n_rows=6):
+    return np.sqrt(v / 2)[None, :] * (rng.standard_normal((n_rows, FREQ.size)) +
+                                      1j * rng.standard_normal((n_rows, FREQ.size)))
+
+
+def _best_noise_pole(rows, zeta=0.005):
+    """The pole a sweep would fit to the noise near the top: of the candidate lines in the
+    band's top tenth, the one whose fit removes the most power (a search, as a sweep is)."""
+    base = rows - _residual_terms_only(FREQ, rows, "accelerance")
+    best = None
+    for fr in FREQ[FREQ > FREQ[-1] - 0.1 * (FREQ[-1] - FREQ[0])][::2]:
+        s = np.array([-zeta * 2 * np.pi * fr + 2j * np.pi * fr])
+        syn = lsfd(FREQ, rows, s).synthesis
+        gain = np.sum(np.abs(base) ** 2) - np.sum(np.abs(rows - syn) ** 2)
+        if best is None or gain > best[0]:
+            best = (gain, s, syn)
+    return best[1], best[2]
+
+
+def test_noise_test_holds_its_false_alarm_rate_where_the_noise_rises():
+    """Noise alone, its variance rising 50 × over the band's top fifth (a hammer's spectrum
+    falling 17 dB): the pole a search fits there passes the noise test in none of 40 seeded
+    trials with the noise's shape given (the test is designed for α = 1e-3 per band;
+    measured: its statistic at 0.14–0.63 of the threshold, median 0.33); with the noise
+    taken as white, as before, it passes in most (measured: 4.6–18 ×, median 10) — the case
+    the shape is for. With the shape but unweighted fits it passed in 2 of the 40."""
+    v = 1 + 49 * np.clip((FREQ - 340.0) / 80.0, 0, 1) ** 2
+    passed = {True: 0, False: 0}
+    for seed in range(40):
+        rows = _noise_rows(np.random.default_rng(seed), v)
+        s, syn = _best_noise_pole(rows)
+        for shaped in (True, False):
+            ok, _ = _above_noise(FREQ, rows, syn, s, lambda keep, weight=None: lsfd(FREQ, rows, s[keep],
+                                                                                    weight=weight).synthesis,
+                                 "accelerance", noise=v / np.median(v) if shaped else None)
+            passed[shaped] += bool(ok[0])
+    assert NOISE_ALPHA <= 1e-3
+    assert passed[True] == 0
+    assert passed[False] >= 20
+
+
+def test_weighted_lsfd_is_the_better_estimator_where_the_noise_rises():
+    """Gauss–Markov: with noise of known shape, least squares weighted by 1 / its RMS has
+    the smaller variance. One mode at 400 Hz (ζ 1 %), the noise's variance rising 50 × over
+    the band's top fifth, 300 seeded draws: the residue's scatter weighted is under that of
+    the unweighted fit (measured: 0.92 × it), and both are unbiased within 4 standard errors; a constant weight
+    gives the unweighted fit exactly."""
+    v = 1 + 49 * np.clip((FREQ - 340.0) / 80.0, 0, 1) ** 2
+    s = np.array([-0.01 * 2 * np.pi * 400.0 + 2j * np.pi * 400.0 * np.sqrt(1 - 1e-4)])
+    r_true = 1e3 + 500j
+    H0 = synthesize(FREQ, np.array([[r_true]]), s, form="accelerance")
+    rng = np.random.default_rng(7)
+    est = {"weighted": [], "unweighted": []}
+    for _ in range(300):
+        H = H0 + 0.02 * np.abs(H0).max() * np.sqrt(v / 2) * (rng.standard_normal(FREQ.size) +
+                                                            1j * rng.standard_normal(FREQ.size))
+        est["weighted"].append(lsfd(FREQ, H, s, weight=1 / np.sqrt(v)).residues[0, 0])
+        est["unweighted"].append(lsfd(FREQ, H, s).residues[0, 0])
+    w, u = np.array(est["weighted"]), np.array(est["unweighted"])
+    assert np.std(w) < np.std(u)
+    for e in (w, u):
+        assert abs(e.mean() - r_true) < 4 * np.std(e) / np.sqrt(e.size)
+    H = H0 + 0.01 * (rng.standard_normal(FREQ.size) + 1j * rng.standard_normal(FREQ.size))
+    assert np.allclose(lsfd(FREQ, H, s, weight=np.full(FREQ.size, 3.0)).residues, lsfd(FREQ, H, s).residues)
