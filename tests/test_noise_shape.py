@@ -8,7 +8,7 @@ variance rises towards the band's top, against the α it is designed for.
 
 import numpy as np
 
-from tiremodal_cli.modal.band import noise_shape
+from tiremodal_cli.modal.band import noise_shape, window_noise_gain
 from tiremodal_cli.modal.groupfit import NOISE_ALPHA, _above_noise, _residual_terms_only
 from tiremodal_cli.modal.lsfd import lsfd, synthesize
 
@@ -115,3 +115,54 @@ def test_weighted_lsfd_is_the_better_estimator_where_the_noise_rises():
         assert abs(e.mean() - r_true) < 4 * np.std(e) / np.sqrt(e.size)
     H = H0 + 0.01 * (rng.standard_normal(FREQ.size) + 1j * rng.standard_normal(FREQ.size))
     assert np.allclose(lsfd(FREQ, H, s, weight=np.full(FREQ.size, 3.0)).residues, lsfd(FREQ, H, s).residues)
+
+
+def _windowed_noise_rows(rng, n_rows, fs=1024.0, record_s=1.0, end=0.05):
+    """Rows of the DFT of white time noise under an exponential window ending at ``end``,
+    on the lines 20–400 Hz; and the window's τ."""
+    n = int(fs * record_s)
+    t = np.arange(n) / fs
+    tau = -t[-1] / np.log(end)
+    f = np.fft.rfftfreq(n, 1 / fs)
+    sel = (f >= 20) & (f <= 400)
+    return f[sel], np.fft.rfft(rng.standard_normal((n_rows, n)) * np.exp(-t / tau), axis=1)[:, sel], tau
+
+
+def test_window_noise_gain_is_what_a_pole_takes_up_of_windowed_noise():
+    """The noise a pole's column takes up (its projection's power over the lines' variance),
+    averaged over 300 seeded windowed records, is κ_r of the closed form within 7 % (ζ 0.5 %
+    and 2 % at 200 Hz; 1 without the window)."""
+    rng = np.random.default_rng(11)
+    f, _, tau = _windowed_noise_rows(rng, 1)
+    for zeta in (0.005, 0.02):
+        s = -zeta * 2 * np.pi * 200.0 + 2j * np.pi * 200.0
+        col = 1.0 / (2j * np.pi * f - s)
+        col = col / np.linalg.norm(col)
+        X = np.concatenate([_windowed_noise_rows(rng, 30)[1] for _ in range(10)])
+        taken = np.mean(np.abs(X @ np.conj(col)) ** 2) / np.mean(np.abs(X) ** 2)
+        assert abs(taken / window_noise_gain(-s.real, tau, 1.0)[0] - 1) < 0.07, (zeta, taken)
+    assert np.all(window_noise_gain([5.0, 50.0], None, 1.0) == 1.0)
+
+
+def test_noise_test_holds_its_rate_under_the_exponential_window():
+    """Windowed noise alone (the FRF stage's window, ending at 5 %): the pole a search fits
+    passes the noise test in none of 20 seeded trials with each pole's threshold scaled by
+    κ_r (its statistic then at 0.45 of the threshold, median; the unwindowed noise's 0.48),
+    and in most without (measured: 20 of 20, 2.2–3.7 × the threshold)."""
+    passed = {True: 0, False: 0}
+    for seed in range(20):
+        f, Y, tau = _windowed_noise_rows(np.random.default_rng(seed), 6)
+        best = None
+        for fr in f[10:-10:6]:
+            s = np.array([-0.02 * 2 * np.pi * fr + 2j * np.pi * fr])
+            syn = lsfd(f, Y, s).synthesis
+            gain = np.sum(np.abs(Y) ** 2) - np.sum(np.abs(Y - syn) ** 2)
+            if best is None or gain > best[0]:
+                best = (gain, s, syn)
+        _, s, syn = best
+        for scaled in (True, False):
+            ok, _ = _above_noise(f, Y, syn, s, lambda keep, weight=None: lsfd(f, Y, s[keep], weight=weight).synthesis,
+                                 "accelerance", window=(tau, 1.0) if scaled else None)
+            passed[scaled] += bool(ok[0])
+    assert passed[True] == 0
+    assert passed[False] >= 15

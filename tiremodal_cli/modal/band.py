@@ -16,7 +16,7 @@ from tiremodal_cli.errors import DataFormatError, ParameterError
 log = logging.getLogger(__name__)
 
 __all__ = ["COHERENCE_ALPHA", "FORCE_DROP_DB", "coherence_threshold", "default_band", "band_or_every_line",
-           "order_for_lines", "no_stable_mode", "live_channels", "noise_shape"]
+           "order_for_lines", "no_stable_mode", "live_channels", "noise_shape", "window_noise_gain"]
 
 
 #: probability that a line of pure noise passes the coherence test in one FRF
@@ -201,3 +201,26 @@ def noise_shape(force_autospectrum, n_averages=None) -> np.ndarray | None:
         return None
     g = np.maximum(g, g.max() * 1e-12)  # an exact zero of the force (a notch): noise without bound, held finite
     return np.mean(1.0 / (n_d[:, None] * g), axis=0)
+
+
+def window_noise_gain(sigma, exp_tau_s, line_hz: float):
+    """How much more of the FRFs' noise a pole takes up under the exponential window than on
+    independent lines: κ_r ≥ 1 for each pole's decay rate ``sigma`` (1/s, > 0), or ones.
+
+    A response record's white sensor noise, windowed by w(t) = e^{−t/τ} over T = 1 / line_hz,
+    has variance ∝ w(t)² in time; each line's variance is its mean over the record,
+    (τ / 2T)(1 − e^{−2T/τ}). A pole's column over the lines is, in time, its impulse response
+    e^{−σt} (σ as fitted to the windowed FRFs: the structure's and the window's decay), so the
+    noise it takes up has the variance w² weighted by e^{−2σt}: σ / (σ + 1/τ). Their ratio,
+    κ_r = [σ / (σ + 1/τ)] / [(τ / 2T)(1 − e^{−2T/τ})], is 3–6 for a window ending at 5 %
+    (T / τ = ln 20) and 1 without a window. Measured (tests/test_noise_shape.py): a pole's
+    column at 200 Hz takes up 4.24 × (ζ 0.5 %) and 5.20 × (ζ 2 %) of seeded windowed noise what
+    independent lines would give it (the formula: 4.07 and 5.37); the pole a search fits to
+    such noise passed the unscaled noise test in 20 of 20 trials, none scaled.
+    """
+    sigma = np.atleast_1d(np.asarray(sigma, dtype=float))
+    if exp_tau_s is None or not exp_tau_s > 0 or not line_hz > 0:
+        return np.ones_like(sigma)
+    x = 1.0 / (line_hz * exp_tau_s)  # T / τ
+    mean_w2 = (1.0 - np.exp(-2.0 * x)) / (2.0 * x)
+    return np.maximum(sigma / (sigma + 1.0 / exp_tau_s) / mean_w2, 1.0)

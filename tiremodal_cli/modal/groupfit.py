@@ -17,6 +17,7 @@ import numpy as np
 import scipy.special
 
 from tiremodal_cli.conventions import FORM_POWER
+from tiremodal_cli.modal.band import window_noise_gain
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import lsfd, lsfd_participation, significance
 
@@ -39,6 +40,8 @@ class GroupData:
     n_h, n_c : int                     harmonics (references) and live channels
     noise : (K,) ndarray or None       the rows' noise variance per line, relative
                                        (:func:`~tiremodal_cli.modal.band.noise_shape`; None: white)
+    window : (τ s, line Hz) or None    the FRFs' exponential window
+                                       (:func:`~tiremodal_cli.modal.band.window_noise_gain`)
     """
 
     freq: np.ndarray
@@ -51,6 +54,7 @@ class GroupData:
     n_h: int
     n_c: int
     noise: np.ndarray | None = None
+    window: tuple | None = None
 
 
 @dataclass(frozen=True)
@@ -179,7 +183,7 @@ def _weakest(data: GroupData, synthesis, s, sig, refit, own_peak):
     if not peak.all():
         r = int(np.flatnonzero(~peak)[0])
         return r, "no peak and no phase turn in its half-power band in any FRF of its group"
-    above, ratio = _above_noise(freq, rows, synthesis, s, refit, form, noise=data.noise)
+    above, ratio = _above_noise(freq, rows, synthesis, s, refit, form, noise=data.noise, window=data.window)
     if not above.all():
         r = int(np.argmin(ratio))
         return r, (f"not supported by the data: explains {ratio[r]:.2f} × what the noise in its half-power band "
@@ -292,7 +296,7 @@ def pin_limit(half_width_hz, line_hz, peak_over_noise):
 NOISE_ALPHA = 1e-3
 
 
-def _above_noise(freq, rows, synthesis, s, refit, form, alpha=NOISE_ALPHA, noise=None):
+def _above_noise(freq, rows, synthesis, s, refit, form, alpha=NOISE_ALPHA, noise=None, window=None):
     """Which modes the data support: the extra sum of squares of each mode against the noise.
 
     The noise variance σ² of each row is the median of |rows − synthesis|² over the band
@@ -309,7 +313,11 @@ def _above_noise(freq, rows, synthesis, s, refit, form, alpha=NOISE_ALPHA, noise
     fits with and without each mode are then weighted least squares (``refit(keep,
     weight)``), as the statistic's χ² needs (an unweighted fit lets the loud lines move the
     residual terms, and a pole there takes the blame back: 2 of 40 noise poles passed).
-    Returns (mask, ΔE_r / threshold).
+    ``window`` ((τ s, line Hz) of the FRFs' exponential window, or None): each pole's
+    threshold times κ_r (:func:`~tiremodal_cli.modal.band.window_noise_gain`): the window
+    makes the noise fall over each record, and a pole — its impulse response early in the
+    record — takes up κ_r times what independent lines would give it. Returns (mask,
+    ΔE_r / threshold_r).
     """
     w = 1.0 if noise is None else 1.0 / np.asarray(noise, dtype=float)
     lw = None if noise is None else np.sqrt(w)
@@ -320,14 +328,15 @@ def _above_noise(freq, rows, synthesis, s, refit, form, alpha=NOISE_ALPHA, noise
     var = np.maximum(var, np.finfo(float).tiny)
     base = float(np.sum(np.sum((res.real**2 + res.imag**2) * w, axis=1) / var))
     # χ² upper quantile (scipy.stats costs 0.4 s to import)
-    thr = scipy.special.chdtri(2 * rows.shape[0] + 2, alpha / freq.size) / 2
+    thr = scipy.special.chdtri(2 * rows.shape[0] + 2, alpha / freq.size) / 2 * \
+        (window_noise_gain(-np.asarray(s).real, *window) if window else np.ones(len(s)))
     ratio = np.zeros(len(s))
     for r in range(len(s)):
         keep = np.delete(np.arange(len(s)), r)
         e = (refit(keep) if lw is None else refit(keep, weight=lw)) if keep.size else \
             _residual_terms_only(freq, rows, form, lw)
         d = rows - e
-        ratio[r] = (float(np.sum(np.sum((d.real**2 + d.imag**2) * w, axis=1) / var)) - base) / thr
+        ratio[r] = (float(np.sum(np.sum((d.real**2 + d.imag**2) * w, axis=1) / var)) - base) / thr[r]
     return ratio >= 1, ratio
 
 

@@ -103,6 +103,8 @@ class _Band:
     to_acc : (K,) complex, the factor from the given form ; Hb : (n_live, n_points, K)
     noise : (K,) the FRFs' noise variance per line in accelerance, relative (median 1;
     :func:`~tiremodal_cli.modal.band.noise_shape`), or None (white)
+    window : (τ s, line spacing Hz) of the FRFs' exponential window, or None
+    (:func:`~tiremodal_cli.modal.band.window_noise_gain`)
     """
 
     live: np.ndarray
@@ -111,6 +113,7 @@ class _Band:
     to_acc: np.ndarray
     Hb: np.ndarray
     noise: np.ndarray | None = None
+    window: tuple | None = None
 
     @property
     def flat(self) -> np.ndarray:
@@ -142,7 +145,7 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
     opt.check()
     freq_hz = np.asarray(freq_hz, dtype=float)
     H = np.asarray(H)
-    band = _band_frfs(freq_hz, H, live_channels(freq_hz, H), form, opt, noise_var)
+    band = _band_frfs(freq_hz, H, live_channels(freq_hz, H), form, opt, noise_var, exp_tau_s)
     spatial = opt.spatial == "on" or (opt.spatial == "auto" and point_angle is not None
                                       and is_circumferential(point_angle, channel_location))
     groups, group_max, opt = _order_groups(band, point_angle, spatial, opt)
@@ -192,7 +195,7 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
     synth = np.zeros(band.flat.shape, dtype=complex)
     for i, (g, (rows, back)) in enumerate(sorted(groups.items())):
         data = GroupData(band.freq, rows, back, band.flat, "accelerance", opt, g, rows.shape[0] // band.Hb.shape[0],
-                         band.Hb.shape[0], band.noise)
+                         band.Hb.shape[0], band.noise, band.window)
         out[g] = (data, group_modes(data, spatial, group_max, split=not gaps))
         if progress:
             progress(i + 1, len(groups))
@@ -230,7 +233,7 @@ def _modes_of_groups(band: _Band, groups, point_angle, spatial: bool, gaps: bool
     return diagrams, modes, rejected, synth, kept, mixing
 
 
-def _band_frfs(freq_hz, H, live, form: str, opt: ModalOptions, noise_var=None) -> _Band:
+def _band_frfs(freq_hz, H, live, form: str, opt: ModalOptions, noise_var=None, exp_tau_s=None) -> _Band:
     """The live FRFs on the band's lines, in accelerance, and their noise variance per line
     (``noise_var``, median 1 over the band: the records are accelerations (FORMAT.md), so
     their sensor noise is the same in accelerance whatever form the FRFs are given in).
@@ -251,7 +254,8 @@ def _band_frfs(freq_hz, H, live, form: str, opt: ModalOptions, noise_var=None) -
     to_acc = (2j * np.pi * k_lines) ** (2 - FORM_POWER[form])
     noise = None if noise_var is None else np.asarray(noise_var, dtype=float)[lines]
     noise = None if noise is None else noise / np.median(noise)
-    return _Band(live, lines, k_lines, to_acc, H[live][:, :, lines] * to_acc, noise)
+    window = (float(exp_tau_s), float(freq_hz[1] - freq_hz[0])) if exp_tau_s and freq_hz.size > 1 else None
+    return _Band(live, lines, k_lines, to_acc, H[live][:, :, lines] * to_acc, noise, window)
 
 
 def _order_groups(band: _Band, point_angle, spatial: bool, opt: ModalOptions):
