@@ -22,7 +22,8 @@ lines within :data:`~tiremodal_cli.modal.refine.WINDOW_HALF_WIDTHS` half-widths)
 poles whose half-power bands reach the proposal refined by variable projection without a
 new pole (E₀), and with one — its frequency and damping free, a free residue per row (E₁).
 The new pole is kept when E₀ − E₁ exceeds the 1 − α/K quantile of χ²(2 R + 2)/2 (the noise
-test's own bound for one more pole: a complex residue per row, its frequency and damping),
+test's own bound for one more pole: a complex residue per row, its frequency and damping;
+times the pole's gain κ_r under the FRFs' exponential window, as there),
 when it ends inside its box (its frequency within :data:`SEARCH_HALF_WIDTHS` half-widths of
 the proposal, its damping within a factor :data:`~tiremodal_cli.modal.refine.MAX_DAMPING_FACTOR`
 of the group's), more than a line and :data:`~tiremodal_cli.modal.groupfit.PIN_SIGMAS`
@@ -49,6 +50,7 @@ import scipy.optimize
 import scipy.special
 
 from tiremodal_cli.conventions import FORM_POWER
+from tiremodal_cli.modal.band import window_noise_gain
 from tiremodal_cli.modal.groupfit import NOISE_ALPHA, PIN_SIGMAS
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import lsfd_participation
@@ -168,7 +170,7 @@ def _minimum(fun, lim):
     return float(r @ r), sol.x, forward_jacobian(f, sol.x)
 
 
-def _try(freq, rows, weight, s, L, f_c, zeta_ref, q, thr):
+def _try(freq, rows, weight, s, L, f_c, zeta_ref, q, thr, window=None):
     """The nested test of a proposal at ``f_c`` Hz (module doc): (new pole, its participation
     (n_ref,), its frequency's standard error, Hz) or None. The fit with the new pole and the
     checks on it come first, the fit without it (E₀) only for a pole that passes them: the
@@ -199,7 +201,8 @@ def _try(freq, rows, weight, s, L, f_c, zeta_ref, q, thr):
     if got is None:
         return None
     E0 = _minimum(_fitter(jw, Y, s, L, sets0, q), np.delete(lim, [near.size, lim.size - 1]))[0]
-    return got if E0 - E1 >= thr else None
+    gain = float(window_noise_gain(-got[0].real, *window)[0]) if window else 1.0
+    return got if E0 - E1 >= thr * gain else None
 
 
 def _checked(fitted, J, near, new, m0, L, weight, line_hz, hw_c):
@@ -224,7 +227,8 @@ def _checked(fitted, J, near, new, m0, L, weight, line_hz, hw_c):
     return s_new, np.linalg.svd(R.T)[2][0], sigma_hz
 
 
-def beside_poles(freq, rows, synthesis, s, L, *, form: str = "accelerance", alpha: float = NOISE_ALPHA):
+def beside_poles(freq, rows, synthesis, s, L, *, form: str = "accelerance", alpha: float = NOISE_ALPHA,
+                 window=None):
     """Poles the group's residual asks for beside its kept ones (module doc).
 
     Parameters
@@ -233,6 +237,9 @@ def beside_poles(freq, rows, synthesis, s, L, *, form: str = "accelerance", alph
     rows : (n_ref · n_c, K) complex    the group's FRFs, reference-major
     synthesis : (n_ref · n_c, K) complex   the group's fit with the poles ``s``
     s : (m,) complex, rad/s ; L : (m, n_ref) complex   the kept poles and participations
+    window : (τ s, line Hz) or None    the FRFs' exponential window: the nested test's bound
+                                       times the new pole's gain κ_r
+                                       (:func:`~tiremodal_cli.modal.band.window_noise_gain`)
 
     Returns
     -------
@@ -257,7 +264,7 @@ def beside_poles(freq, rows, synthesis, s, L, *, form: str = "accelerance", alph
             if i in tried:
                 continue
             tried.add(i)
-            got = _try(freq, rows, weight, s, L, float(freq[i]), zeta_ref, q, thr)
+            got = _try(freq, rows, weight, s, L, float(freq[i]), zeta_ref, q, thr, window)
             if got is not None:
                 break
         if got is None:
@@ -279,7 +286,7 @@ def with_beside(data, diagram, s0, parts, s, synthesis):
     if s.size == 0 or any(pt is None for pt in parts):
         return None
     L = np.array([parts[list(s0).index(p)] for p in s])
-    new = beside_poles(data.freq, data.rows, synthesis, s, L, form=data.form)
+    new = beside_poles(data.freq, data.rows, synthesis, s, L, form=data.form, window=data.window)
     if not new:
         return None
     extra = []

@@ -25,6 +25,7 @@ import scipy.linalg
 import scipy.special
 
 from tiremodal_cli.conventions import FORM_POWER
+from tiremodal_cli.modal.band import window_noise_gain
 from tiremodal_cli.modal.groupfit import NOISE_ALPHA
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import pole_basis, synthesize
@@ -140,7 +141,7 @@ def cleaned_groups(freq_hz, Hb, angles_rad, poles, orders, form: str = "accelera
 
 
 def weak_in_frfs(modes, min_significance: float, freq_hz, angles_rad, residual,
-                 alpha: float = NOISE_ALPHA) -> tuple[list, list]:
+                 alpha: float = NOISE_ALPHA, window=None) -> tuple[list, list]:
     """Drop the modes that explain under ``min_significance`` of the physical FRFs around
     their frequency, whatever their share within their order group, or no more there
     than a fit of their unknowns to the noise would.
@@ -158,7 +159,9 @@ def weak_in_frfs(modes, min_significance: float, freq_hz, angles_rad, residual,
     ``residual``'s power / ln 2), is for p complex residues (its group's n_h columns × the
     channels) fitted to noise alone χ²(2p)/2 (least squares projects the noise on p complex
     dimensions); a mode must exceed its 1 − ``alpha``/K quantile (the band's K lines, as
-    the group fit's noise test). Where the response is weak the rows of a grid with gaps
+    the group fit's noise test), times the pole's window gain κ_r (``window``: the FRFs'
+    exponential window (τ s, line Hz), :func:`~tiremodal_cli.modal.band.window_noise_gain`:
+    the window's noise lies where a pole's response does). Where the response is weak the rows of a grid with gaps
     hold poles fitted to the noise (the ring's 1,024 Hz combination, 9 of 40 points
     failed: 45.60 Hz, 12.7 % of the response, E at 0.65 × the quantile; 14.39 Hz before
     the copy rule's change, 6.5 %, under 0.1 ×); a weak mode beside a strong one explains
@@ -171,6 +174,7 @@ def weak_in_frfs(modes, min_significance: float, freq_hz, angles_rad, residual,
     modes : list of :class:`~tiremodal_cli.modal.merge.MergedMode`
     min_significance : float ; freq_hz : (K,) Hz, the band's lines ; angles_rad : (n_points,)
     residual : (n_frf, K) complex, the FRFs less the modal model (accelerance) ; alpha : float
+    window : (τ s, line Hz) or None
 
     Returns
     -------
@@ -188,7 +192,8 @@ def weak_in_frfs(modes, min_significance: float, freq_hz, angles_rad, residual,
         win = np.abs(freq_hz - f) <= max(z * f, 2 * df)
         p = n_h[m.group] * n_c
         e = float(np.sum(np.sum(np.abs(synthesize(freq_hz[win], m.residues[:, None], [m.pole])) ** 2, axis=1) / var))
-        ratio = e / (scipy.special.chdtri(2 * p, alpha / freq_hz.size) / 2)
+        gain = float(window_noise_gain(-np.real(m.pole), *window)[0]) if window else 1.0
+        ratio = e / (scipy.special.chdtri(2 * p, alpha / freq_hz.size) / 2 * gain)
         if m.significance >= min_significance and ratio > 1:
             kept.append(m)
             continue

@@ -45,6 +45,7 @@ import scipy.special
 from tiremodal_cli.conventions import FORM_POWER
 from tiremodal_cli.modal.classify import classify
 from tiremodal_cli.modal.gaps import min_norm_solve, order_design
+from tiremodal_cli.modal.band import window_noise_gain
 from tiremodal_cli.modal.groupfit import NOISE_ALPHA
 from tiremodal_cli.modal.lsce import poles_to_modal
 from tiremodal_cli.modal.lsfd import pole_basis, significance, synthesize
@@ -222,6 +223,7 @@ class _Problem:
     q: int
     n_lines: int
     branch_of: dict = None  # {pole index: branch} of the proposals
+    exp_window: tuple | None = None  # the FRFs' exponential window (τ s, line Hz): the noise test's gain
 
     def window(self, f_lo, f_hi):
         w = (self.freq >= f_lo) & (self.freq <= f_hi)
@@ -279,13 +281,15 @@ def _local(prob: _Problem, s, s_orig, cols, alive, j, held=False):
 
 def _gain(prob: _Problem, s, cols, alive, j, n_c) -> float:
     """Proposal ``j``'s improvement of the fit in its window, E(without j) − E(with j), over
-    its :func:`threshold`."""
+    its :func:`threshold` times its pole's window gain κ_r (the FRFs' exponential window:
+    :func:`~tiremodal_cli.modal.band.window_noise_gain`)."""
     freq, Yr, idx = _around(prob, s, alive, j)
     e = []
     for use in (idx, idx[idx != j]):
         r = _fit(freq, Yr, prob.D, [cols[i] for i in use], s[use], prob.q)[0]
         e.append(float(r @ r))
-    return (e[1] - e[0]) / threshold(len(cols[j]) * n_c, prob.n_lines)
+    gain = float(window_noise_gain(-s[j].real, *prob.exp_window)[0]) if prob.exp_window else 1.0
+    return (e[1] - e[0]) / (threshold(len(cols[j]) * n_c, prob.n_lines) * gain)
 
 
 def _joint(prob: _Problem, props) -> tuple:
@@ -335,7 +339,7 @@ def _joint(prob: _Problem, props) -> tuple:
     return s, alive[nf:], sigma[nf:], {j - nf: w for j, w in why.items()}
 
 
-def add_missing_orders(freq, Hb, point_angle, locs, modes, synth, form: str = "accelerance") -> tuple:
+def add_missing_orders(freq, Hb, point_angle, locs, modes, synth, form: str = "accelerance", window=None) -> tuple:
     """The modes found on a grid with missing points, with the branches' unfound orders that
     the physical FRFs hold added, and the found modes around them refined (module doc).
 
@@ -343,7 +347,8 @@ def add_missing_orders(freq, Hb, point_angle, locs, modes, synth, form: str = "a
     ----------
     freq : (K,) Hz ; Hb : (n_c, n_p, K) complex, the band's FRFs (``form``) ; point_angle :
     (n_p,) rad ; locs : the channels' locations ; modes : list of MergedMode ; synth : (n_c ·
-    n_p, K) complex, the modes' synthesis (its residual gives each channel's noise)
+    n_p, K) complex, the modes' synthesis (its residual gives each channel's noise) ;
+    window : (τ s, line Hz) of the FRFs' exponential window, or None (the noise test's gain)
 
     Returns
     -------
@@ -369,6 +374,7 @@ def add_missing_orders(freq, Hb, point_angle, locs, modes, synth, form: str = "a
                     [sorted(k for g in m.order_energy for k in col_of[g]) for m in modes],
                     [(c.n, c.branch) for c in classes], FORM_POWER[form], K)
     prob.branch_of = {len(modes) + j: p.branch for j, p in enumerate(props)}
+    prob.exp_window = window
     poles, kept, sigma, why = _joint(prob, props)
     nf, modes, synth, rejected = len(modes), list(modes), synth.copy(), []
     f_all = poles_to_modal(poles[np.concatenate([np.ones(nf, dtype=bool), kept])])[0]
