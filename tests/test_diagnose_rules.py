@@ -3,6 +3,7 @@ own or leave only noise; the breathing mode (n = 0) is evidence even out of its 
 dispersion order."""
 
 import csv
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -163,3 +164,29 @@ def test_the_joint_wald_test_is_the_t_rule_for_one_parameter_and_sees_correlatio
         got = joint_wald_p(_Fit(("a.x", "a.y"), C), ["a.x", "a.y"])
         assert abs(got - scipy.stats.chi2.sf(W, 2)) < 1e-12
     assert joint_wald_p(_Fit(("a.x",), np.eye(1)), ["a.x"]) is None
+
+
+def test_a_set_aside_mode_alone_asks_for_an_effect_that_explains_it():
+    """The paper's model with m_s 0.15 % over its nominal value — every frequency moved by
+    less than the 0.1 % noise floor (RMS 0.011 %), so a test cannot show it (the ruler's
+    *detectable*: χ² p < 0.01 or a mode set aside, on the truth) — and one row 9 % off its
+    order (a pole beyond the band's top read as n = 44). Before the rule the set-aside row
+    asked for an effect and the F-test on the under-the-noise residual adopted m_s (p = 0:
+    the data are exact); now a candidate must bring the row back or have evidence of its
+    own, none does, nothing is adopted and the verdict names the row. Without the row nothing
+    is needed at all."""
+    p = TyreParameters()
+    ns, br = list(range(0, 41)) * 2, ["same"] * 41 + ["opposite"] * 41
+    true = dataclasses.replace(p, m_s=p.m_s * 1.0015)
+    f = model_frequencies(true, ns, br, {})
+    assert np.nanmax(np.abs(f / model_frequencies(p, ns, br, {}) - 1)) < 1e-3
+    rows = [{"frequency_hz": float(x), "n": n, "branch": b} for x, n, b in zip(f, ns, br) if np.isfinite(x)]
+    assert not diagnose(rows, p).adopted
+    off = {"frequency_hz": 1.09 * float(model_frequencies(true, [44], ["opposite"], {})[0]), "n": 44,
+           "branch": "opposite"}
+    d = diagnose(rows + [off], p)
+    assert d.adopted == ()
+    assert d.residual_before["set_aside"] and d.residual_before["p_value"] >= DiagnoseOptions().alpha
+    m_s = next(c for c in d.candidates if c.name == "m_s")
+    assert m_s.f_p_value < DiagnoseOptions().alpha / 11 and "correlated error" in m_s.reason
+    assert "n = 44 opposite" in d.verdict

@@ -256,7 +256,9 @@ def _round(s: _Search, rnd: int, names, extra, opt, nominal, ticks):
     for name in pending:
         round_cands.append(try_candidate(name, trial))
         ticks()
-    best, judged = choose(round_cands, s.current, opt, len(pending), needed=s.residual_now["exceeds_noise"])
+    r = s.residual_now
+    best, judged = choose(round_cands, s.current, opt, len(pending), needed=r["exceeds_noise"],
+                          smooth_at_noise=bool(r["set_aside"]) and r["p_value"] >= opt.alpha)
     s.tried[:] = [c for c in s.tried if c.round != rnd] + list(judged)
     return best
 
