@@ -159,15 +159,11 @@ def weak_in_frfs(modes, min_significance: float, freq_hz, angles_rad, residual,
     ``residual``'s power / ln 2), is for p complex residues (its group's n_h columns × the
     channels) fitted to noise alone χ²(2p)/2 (least squares projects the noise on p complex
     dimensions); a mode must exceed its 1 − ``alpha``/K quantile (the band's K lines, as
-    the group fit's noise test), times the pole's window gain κ_r (``window``: the FRFs'
-    exponential window (τ s, line Hz), :func:`~tiremodal_cli.modal.band.window_noise_gain`:
-    the window's noise lies where a pole's response does). Where the response is weak the rows of a grid with gaps
-    hold poles fitted to the noise (the ring's 1,024 Hz combination, 9 of 40 points
-    failed: 45.60 Hz, 12.7 % of the response, E at 0.65 × the quantile; 14.39 Hz before
-    the copy rule's change, 6.5 %, under 0.1 ×); a weak mode beside a strong one explains
-    a small share of its window, far above the noise (its air-cavity n = 3 at 375.8 Hz,
-    3.8 Hz below a 16 × stronger mode: 7 %, E at 100 ×; the modes adopted in the matrix's
-    two cases with failed points are at 100 × and more).
+    the group fit's noise test), times the pole's window gain κ_r (``window``, τ s and line
+    Hz: :func:`~tiremodal_cli.modal.band.window_noise_gain`). Where the response is weak the
+    rows of a grid with gaps hold poles fitted to the noise (the ring's 1,024 Hz combination:
+    45.60 Hz, E at 0.65 × the quantile); a weak mode beside a strong one is far above it (its
+    cavity n = 3, 7 % of its window, at 100 ×; docs/lsce.md, "Tyres: circumferential orders first").
 
     Parameters
     ----------

@@ -26,9 +26,10 @@ the residues eliminated linearly: :func:`_fit`) over the lines within
 those lines held with its residues — bounded sets, whatever the chain of overlapping bands — in
 :data:`PASSES` Gauss–Seidel passes. A proposal stays only when it ends inside its box, apart from
 the other poles and with its branch's frequencies rising with n (of a falling pair, the
-proposal that moved most goes), and when removing it raises its
-window's residual by more than a fit of its unknowns to the noise would (:func:`threshold`:
-χ²(2p + 2)/2 at the stage's false-alarm level ``NOISE_ALPHA``/K), weakest first; the rest are
+proposal that moved most goes), and when removing it raises its window's residual by more
+than a fit of its unknowns to the noise would (:func:`threshold`:
+χ²(2p + 2)/2 at the stage's false-alarm level ``NOISE_ALPHA``/K, times the proposal's window
+gain κ_r, :func:`~tiremodal_cli.modal.band.window_noise_gain`), weakest first; the rest are
 refined again without the dropped ones (:data:`ROUNDS`). Measured rates and effect: docs/lsce.md
 ("Session 12").
 """
@@ -280,9 +281,7 @@ def _local(prob: _Problem, s, s_orig, cols, alive, j, held=False):
 
 
 def _gain(prob: _Problem, s, cols, alive, j, n_c) -> float:
-    """Proposal ``j``'s improvement of the fit in its window, E(without j) − E(with j), over
-    its :func:`threshold` times its pole's window gain κ_r (the FRFs' exponential window:
-    :func:`~tiremodal_cli.modal.band.window_noise_gain`)."""
+    """Proposal ``j``'s gain in its window, E(without j) − E(with j), over :func:`threshold` × κ_r (module doc)."""
     freq, Yr, idx = _around(prob, s, alive, j)
     e = []
     for use in (idx, idx[idx != j]):
@@ -347,8 +346,8 @@ def add_missing_orders(freq, Hb, point_angle, locs, modes, synth, form: str = "a
     ----------
     freq : (K,) Hz ; Hb : (n_c, n_p, K) complex, the band's FRFs (``form``) ; point_angle :
     (n_p,) rad ; locs : the channels' locations ; modes : list of MergedMode ; synth : (n_c ·
-    n_p, K) complex, the modes' synthesis (its residual gives each channel's noise) ;
-    window : (τ s, line Hz) of the FRFs' exponential window, or None (the noise test's gain)
+    n_p, K) complex, the modes' synthesis (its residual gives each channel's noise) ; window :
+    (τ s, line Hz) of the FRFs' exponential window, or None (the noise test's gain)
 
     Returns
     -------
@@ -372,9 +371,8 @@ def add_missing_orders(freq, Hb, point_angle, locs, modes, synth, form: str = "a
     w = 1 / np.sqrt(np.maximum(var, np.finfo(float).tiny))
     prob = _Problem(freq, Hb * w[:, None, None], D, col_of, np.array([m.pole for m in modes]),
                     [sorted(k for g in m.order_energy for k in col_of[g]) for m in modes],
-                    [(c.n, c.branch) for c in classes], FORM_POWER[form], K)
+                    [(c.n, c.branch) for c in classes], FORM_POWER[form], K, exp_window=window)
     prob.branch_of = {len(modes) + j: p.branch for j, p in enumerate(props)}
-    prob.exp_window = window
     poles, kept, sigma, why = _joint(prob, props)
     nf, modes, synth, rejected = len(modes), list(modes), synth.copy(), []
     f_all = poles_to_modal(poles[np.concatenate([np.ones(nf, dtype=bool), kept])])[0]

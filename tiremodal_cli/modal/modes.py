@@ -163,10 +163,8 @@ def _estimate_modes(freq_hz, H, *, point_angle=None, channel_location=(), form="
                                                                           group_max, opt, progress, ortho, live_angles)
     if gaps:  # the branches' unfound orders, refined jointly with the modes found (modal.joint)
         locs = [tuple(channel_location)[i] for i in np.flatnonzero(band.live)] if len(channel_location) else []
-        modes, synth, proposed = add_missing_orders(band.freq, band.Hb, point_angle, locs, modes, synth,
-                                                     window=band.window)
-        modes, weak = weak_in_frfs(modes, opt.min_significance, band.freq, point_angle, band.flat - synth,
-                                   window=band.window)
+        modes, synth, proposed = add_missing_orders(band.freq, band.Hb, point_angle, locs, modes, synth, window=band.window)
+        modes, weak = weak_in_frfs(modes, opt.min_significance, band.freq, point_angle, band.flat - synth, window=band.window)
         rejected += proposed + weak
     if opt.refine:  # the poles near the band's edges (docs/lsce.md, "Pole refinement"); the physical
         # check where a group's rows are not its orders' whole data (docs/lsce.md, "Session 33")
