@@ -822,6 +822,10 @@ stiffnesses at GL073A's (`validation.nominal_params`).
 | | | ring | 816 / 831 (98 %) | 6 | 9 | **11** / 1345 (0.8 %) | **0** | 28 / 28 |
 | car, held-out levels (seed 5000) | the same | paper | 411 / 413 (100 %) | 0 | 2 | **7** / 572 (1.2 %) | 1 | 11 / 12 |
 | | | ring | 397 / 413 (96 %) | 7 | 9 | **4** / 572 (0.7 %) | **0** | 10 / 12 |
+| car matrix | session 49 (the window's gain in the other noise tests; diagnose rule 6) | paper | 729 / 745 (98 %) | 2 | 14 | 5 / 1146 (0.4 %) | 1 | 25 / 27 |
+| | | ring | 816 / 831 (98 %) | 6 | 9 | 11 / 1345 (0.8 %) | 0 | 28 / 28 |
+| car, held-out levels (seed 5000) | the same | paper | 411 / 413 (100 %) | 0 | 2 | 7 / 572 (1.2 %) | 1 | 11 / 12 |
+| | | ring | 397 / 413 (96 %) | 7 | 9 | 4 / 572 (0.7 %) | 0 | 10 / 12 |
 
 *What the first run found.* Nine of the 17 mislabelled modes were one defect, on tests with
 nothing the truck's matrix lacks (1,024 Hz, 40 points, receptance, faults, the cavity): a
@@ -978,6 +982,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | 2026-12-07, session 48, on an AMD EPYC | the noise test's variance per line follows the hammer's spectrum (1 / G_ff over the points), its two fits weighted least squares (groupfit, band.noise_shape): unchanged in every count; adopted 1697 → 1696 (paper reference), 1865 → 1866 (ring coupling + mass) | paper | 1173 / 1182 (99 %) | 6 / 1696 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 7.1 min (`--jobs 2`, other runs beside it) |
 | | | ring | 1312 / 1334 (98 %) | 5 / 1866 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-12-07, end of session 48 | and each pole's threshold times what the exponential window's noise gives a pole (band.window_noise_gain, 3–6): the membrane + cavity's in-phase n = 54 found; spurious +169.90 Hz (5 % noise), +179.64 Hz (added mass), −338.40 Hz | paper | **1174** / 1182 (99 %) | 7 / 1698 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 8.6 min (`--jobs 2`, other runs beside it) |
+| | | ring | 1312 / 1334 (98 %) | 5 / 1864 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-12-07, session 49, on an AMD EPYC | the window's gain κ_r also in the beside, gaps and joint noise tests; a set-aside mode alone asks for an effect that explains it (diagnose rule 6): spurious −169.90 Hz (5 % noise, a beside pole) | paper | 1174 / 1182 (99 %) | **6** / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 7.7 min (`--jobs 2`) |
 | | | ring | 1312 / 1334 (98 %) | 5 / 1864 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
