@@ -68,7 +68,7 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["MISREAD_MAX_SIGNIFICANCE", "misread", "crowd_blends", "false_splits", "without_misreads"]
+__all__ = ["MISREAD_MAX_SIGNIFICANCE", "misread", "crowd_blends", "false_splits", "without_misreads", "without_modes", "dropped_and_classified"]
 
 #: a mode out of its branch's order at its spatial order must explain at least this share
 #: of the physical response in its half-power band (measured on the matrix: see above)
@@ -134,7 +134,7 @@ def without_misreads(res, classify_modes, symmetric: bool = False):
                          f"dispersion order, and explaining {100 * res.significance[i]:.1f} % of the physical "
                          f"response in its half-power band (< {100 * MISREAD_MAX_SIGNIFICANCE:.0f} %): a leak or "
                          f"a blend of its order group's rows, not a mode"}
-        res = _taken(res, np.delete(np.arange(res.freq_hz.size), i), why)
+        res = without_modes(res, np.delete(np.arange(res.freq_hz.size), i), why)
         classes = classify_modes(res)
 
 
@@ -167,17 +167,23 @@ def false_splits(classes, significance, damping_ratio) -> np.ndarray:
 def _without_false_splits(res, classes, classify_modes):
     """``res`` without :func:`false_splits`' members, the others classified again."""
     bad = np.flatnonzero(false_splits(classes, res.significance, res.damping_ratio))
-    if bad.size == 0:
+    return dropped_and_classified(res, classes, bad, lambda c: (
+        f"no split-pair member: read n = {c.n} {c.branch} beside a stronger, narrower mode of that "
+        f"order {c.splitting_hz:.2f} Hz away, on a test whose FRFs show a structure symmetric about "
+        "its sensors (its cos and sin modes share one frequency): a blend of what its order "
+        "group's fit leaves beside the mode"), classify_modes)
+
+
+def dropped_and_classified(res, classes, bad, reason, classify_modes):
+    """``res`` without the modes ``bad`` (indices into it), each added to ``res.rejected`` with
+    ``reason(classification)``, and the others classified again (``classify_modes``); ``res``
+    and ``classes`` as they are when ``bad`` is empty."""
+    if len(bad) == 0:
         return res, classes
-    for i in bad[::-1]:
-        c = classes[i]
+    for i in sorted(bad, reverse=True):
         why = {"frequency_hz": float(res.freq_hz[i]), "damping_ratio": float(res.damping_ratio[i]),
-               "group": int(res.group[i]),
-               "reason": f"no split-pair member: read n = {c.n} {c.branch} beside a stronger, narrower mode of that "
-                         f"order {c.splitting_hz:.2f} Hz away, on a test whose FRFs show a structure symmetric about "
-                         "its sensors (its cos and sin modes share one frequency): a blend of what its order "
-                         "group's fit leaves beside the mode"}
-        res = _taken(res, np.delete(np.arange(res.freq_hz.size), i), why)
+               "group": int(res.group[i]), "reason": reason(classes[i])}
+        res = without_modes(res, np.delete(np.arange(res.freq_hz.size), i), why)
     return res, classify_modes(res)
 
 
@@ -198,7 +204,7 @@ def _without_blends(res, classes):
                          "the channels alone, while orders of its alias class crowd within its bandwidth (n = "
                          f"{' '.join(str(k) for k in c.n_candidates)}): one pole standing for several modes moves "
                          "the channels as none of them does, so that shape is no evidence of a mode"}
-        res = _taken(res, np.delete(np.arange(res.freq_hz.size), i), why)
+        res = without_modes(res, np.delete(np.arange(res.freq_hz.size), i), why)
     out = [classes[k] if classes[k].pair is None or classes[k].pair in new and any(
         classes[q].pair == classes[k].pair for q in keep if q != k) else
         dataclasses.replace(classes[k], pair=None, splitting_hz=None) for k in keep]
@@ -214,7 +220,7 @@ def crowd_blends(classes, by_channels) -> np.ndarray:
     return flag & np.array([c is not None and bool(c.crowd) for c in classes], dtype=bool)
 
 
-def _taken(res, keep, rejected: dict):
+def without_modes(res, keep, rejected: dict):
     """``res`` with only the modes ``keep`` (the synthesis stays the order groups' fit)."""
     meta = dict(res.meta)
     for key in ("order_energy", "significance_in_group", "by_channels"):
