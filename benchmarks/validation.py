@@ -826,6 +826,10 @@ stiffnesses at GL073A's (`validation.nominal_params`).
 | | | ring | 816 / 831 (98 %) | 6 | 9 | 11 / 1345 (0.8 %) | 0 | 28 / 28 |
 | car, held-out levels (seed 5000) | the same | paper | 411 / 413 (100 %) | 0 | 2 | 7 / 572 (1.2 %) | 1 | 11 / 12 |
 | | | ring | 397 / 413 (96 %) | 7 | 9 | 4 / 572 (0.7 %) | 0 | 10 / 12 |
+| car matrix | session 50 (a pair split beyond a lumped mass's fraction loses its blended member): unchanged case by case (its mass tests' anti-phase pairs of n ≥ 2 all within 2 × their median) | paper | 729 / 745 (98 %) | 2 | 14 | 5 / 1146 (0.4 %) | 1 | 25 / 27 |
+| | | ring | 816 / 831 (98 %) | 6 | 9 | 11 / 1345 (0.8 %) | 0 | 28 / 28 |
+| car, held-out levels (seed 5000) | the same: unchanged | paper | 411 / 413 (100 %) | 0 | 2 | 7 / 572 (1.2 %) | 1 | 11 / 12 |
+| | | ring | 397 / 413 (96 %) | 7 | 9 | 4 / 572 (0.7 %) | 0 | 10 / 12 |
 
 *What the first run found.* Nine of the 17 mislabelled modes were one defect, on tests with
 nothing the truck's matrix lacks (1,024 Hz, 40 points, receptance, faults, the cavity): a
@@ -985,6 +989,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1312 / 1334 (98 %) | 5 / 1864 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-12-07, session 49, on an AMD EPYC | the window's gain κ_r also in the beside, gaps and joint noise tests; a set-aside mode alone asks for an effect that explains it (diagnose rule 6): spurious −169.90 Hz (5 % noise, a beside pole) | paper | 1174 / 1182 (99 %) | **6** / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 7.7 min (`--jobs 2`) |
 | | | ring | 1312 / 1334 (98 %) | 5 / 1864 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-12-07, session 50, on an AMD EPYC | where the orders mix, an anti-phase pair split over 2 × the median of the test's pairs loses its weaker member, a blend with another order's copy (modal.mass_splits): spurious −327.52 Hz (ring + mass); the other tests do not reach the rule; and the pairs it leaves refitted with the other groups' copies where their splitting comes nearer the others' (modal.pair_refine): unchanged case by case | paper | 1174 / 1182 (99 %) | 6 / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 8.6 min (`--jobs 2`, other runs beside it) |
+| | | ring | 1312 / 1334 (98 %) | **4** / 1863 (0.2 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
