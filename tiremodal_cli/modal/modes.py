@@ -28,8 +28,7 @@ from tiremodal_cli.modal.point_order import (angle_order, frf_points_taken, resu
                                              table_points_taken)
 from tiremodal_cli.modal.lsce import poles_to_modal, principal_responses
 from tiremodal_cli.modal.lsfd import mpc
-from tiremodal_cli.modal.mass_splits import without_outlying_splits
-from tiremodal_cli.modal.pair_refine import refined_pairs
+from tiremodal_cli.modal.mixed_rows import where_orders_mix
 from tiremodal_cli.modal.leaks import leak_copies, under_residual
 from tiremodal_cli.modal.merge import COPY_MAX_AMPLITUDE, merge_groups, off_edges
 from tiremodal_cli.modal.misreads import without_misreads
@@ -303,27 +302,14 @@ def _classified(res: ModalResult, r) -> tuple:
                         m.meta.get("significance_in_group"), m.group, mixed=mixed)
 
     res, classes = without_misreads(res, classify_modes, symmetric=share is not None and not mixed)
-    if mixed:  # a pair split far beyond the others (mass_splits); the rest refitted with copies (pair_refine)
-        res, classes = without_outlying_splits(res, classes, classify_modes)
-        f, H_acc, noise = _band_of(res, r, live)
-        res, moves = refined_pairs(res, classes, f, H_acc, r.point_angle, noise, r.exp_tau_s)
-        res.meta["pairs_refined"] = moves
-        classes = classify_modes(res) if moves else classes
+    if mixed:  # split pairs and one order's blends against the other orders' copies (modal.mixed_rows)
+        res, classes = where_orders_mix(res, classes, classify_modes, r, live)
     res.meta["crowds"] = [{"frequency_hz": float(res.freq_hz[i]), "n_spatial": c.n_spatial,
                            "n_candidates": list(c.n_candidates),
                            "reason": "orders aliasing onto one spatial order lie within one half-power "
                                      "bandwidth by the branch's dispersion: the order cannot be told"}
                           for i, c in enumerate(classes) if c.crowd]
     return res, classes
-
-
-def _band_of(res: ModalResult, r, live) -> tuple:
-    """The analysis band's lines (Hz), the live channels' FRFs there in accelerance and their
-    noise variance per line (relative; None without a force spectrum)."""
-    lines = (r.freq_hz >= res.band_freq_hz[0] - 1e-9) & (r.freq_hz <= res.band_freq_hz[-1] + 1e-9)
-    f, noise = r.freq_hz[lines], noise_shape(r.force_autospectrum, r.n_averages)
-    return (f, np.asarray(r.H)[live][:, :, lines] * (2j * np.pi * f) ** (2 - FORM_POWER[r.form]),
-            None if noise is None else noise[lines])
 
 
 def _result(band: _Band, shape, modes, synth, exp_tau_s, *, diagrams, rejected, meta) -> ModalResult:
