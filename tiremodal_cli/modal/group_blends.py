@@ -19,8 +19,9 @@ anti-phase pairs (more than a lumped mass splits an order; without three pairs t
 median from, two rows are not judged).
 
 **The model**: the group's rows over the cluster ± :data:`WINDOW_HALF_WIDTHS` half-power
-half-widths; the group's own poles there free (but its crowd rows); every other group's pole
-there, and the group's crowd rows, held as copies whose residue on each row is a real
+half-widths; the cluster's poles free; the group's other poles there held where the table has them (a
+residue of their own on each row); every other group's pole there, and the group's crowd
+rows, held as copies whose residue on each row is a real
 mode's — a light, proportional damping (a lumped mass adds none) leaves the modes real, and
 the rows are real (cos and sin) combinations of the physical FRFs, so a copy's residue on a
 row is imaginary (the receptance's φφᵀ/(2jω_d m)). Free complex residues let two copies
@@ -135,11 +136,14 @@ class _Window:
     freq_hz: np.ndarray
     data: np.ndarray  # (2 K, n_rows)
     weight: np.ndarray  # (2 K, 1)
-    held: np.ndarray
+    held: np.ndarray  # the other orders' poles: real-mode copies
+    fixed: np.ndarray  # the group's other poles: where the table has them, complex residues
 
     def residual(self, free) -> np.ndarray:
-        """The weighted misfit with ``free`` poles (complex residues) and the held ones (imaginary)."""
-        A = pole_basis(self.freq_hz, np.concatenate([self.held, free]), 2, True, True)[:, self.held.size:]
+        """The weighted misfit with ``free`` and ``fixed`` poles (complex residues) and the held
+        ones (imaginary)."""
+        s = np.concatenate([self.held, self.fixed, free])
+        A = pole_basis(self.freq_hz, s, 2, True, True)[:, self.held.size:]
         Ar = np.concatenate([A.real, A.imag], axis=0) * self.weight  # held: only their Im R columns remain
         scale = np.linalg.norm(Ar, axis=0)
         scale[scale == 0] = 1
@@ -197,7 +201,7 @@ def refined_blends(res, classes, freq_hz, H_acc, point_angle, noise=None, exp_ta
 
 
 def _cluster_fit(poles, group, crowd, idx, freq_hz, rows, weight):
-    """The refit of the cluster ``idx``'s group over its window: (own poles' indices, their new
+    """The refit of the cluster ``idx``'s group over its window: (the cluster's indices, their new
     poles, the indices they stand for, [cost with the table's poles, cost after]) or None
     (no rows, too few lines, or no acceptable fit)."""
     if rows is None:
@@ -206,14 +210,15 @@ def _cluster_fit(poles, group, crowd, idx, freq_hz, rows, weight):
     lo = float(np.min(f[idx] - WINDOW_HALF_WIDTHS * hw[idx]))
     hi = float(np.max(f[idx] + WINDOW_HALF_WIDTHS * hw[idx]))
     lines, near = (freq_hz >= lo) & (freq_hz <= hi), (f > lo) & (f < hi)
-    own = np.flatnonzero(near & (group == group[idx[0]]) & ~crowd)
+    own = np.asarray(idx)
+    fixed = np.setdiff1d(np.flatnonzero(near & (group == group[idx[0]]) & ~crowd), own)
     held = np.flatnonzero(near & ((group != group[idx[0]]) | crowd))
-    if lines.sum() < 2 * own.size + held.size + 2 + MIN_SPARE_LINES:
+    if lines.sum() < 2 * (own.size + fixed.size) + held.size + 2 + MIN_SPARE_LINES:
         return None
     w = weight[lines]
     Y = rows[:, lines].T * w[:, None]
     win = _Window(freq_hz[lines], np.concatenate([Y.real, Y.imag], axis=0), np.concatenate([w, w])[:, None],
-                  poles[held])
+                  poles[held], poles[fixed])
     cost0 = win.cost(poles[own])
     new, kept, cost = _reduced(win, poles[own], own, cost0, own.size)
     return None if new is None else (own, new, kept, [cost0, cost])
@@ -269,7 +274,7 @@ def _unearned(win, poles, cost) -> np.ndarray:
     if m < 2:
         return np.zeros(m, dtype=bool)
     n_data = win.data.size
-    n_par = 2 * m + n_rows * (2 * m + win.held.size + 4)
+    n_par = 2 * m + n_rows * (2 * m + win.held.size + 2 * win.fixed.size + 4)
     per_pole = 2 + 2 * n_rows
     if n_data <= n_par:
         return np.zeros(m, dtype=bool)
