@@ -56,7 +56,7 @@ import dataclasses
 
 import numpy as np
 import scipy.optimize
-import scipy.stats
+import scipy.special
 
 from tiremodal_cli.frf.windows import correct_poles
 from tiremodal_cli.modal.lsce import poles_to_modal
@@ -278,7 +278,7 @@ def _unearned(win, poles, cost) -> np.ndarray:
     per_pole = 2 + 2 * n_rows
     if n_data <= n_par:
         return np.zeros(m, dtype=bool)
-    limit = scipy.stats.f.isf(ALPHA, per_pole, n_data - n_par)
+    limit = scipy.special.fdtri(per_pole, n_data - n_par, 1 - ALPHA)  # the F quantile 1 − α
     var = cost / (n_data - n_par)
     return np.array([(_searched(win, np.delete(poles, k))[1] - cost) / per_pole / var < limit for k in range(m)])
 
