@@ -111,3 +111,5 @@ def test_rows_a_mass_could_split_are_not_suspects():
     assert suspect_clusters(f2, 0.02 * f2, group, few) == []  # two pairs: no median
     crowded = [SimpleNamespace(n=c.n, branch=c.branch, pair=c.pair, crowd=i < 2) for i, c in enumerate(cls)]
     assert suspect_clusters(f2, 0.02 * f2, group, crowded) == []  # a crowd's rows stand for other orders
+    one = [SimpleNamespace(n=c.n, branch=c.branch, pair=c.pair, crowd=i == 1) for i, c in enumerate(cls)]
+    assert [list(c) for c in suspect_clusters(f2, 0.02 * f2, group, one)] == [[0]]  # in the chain, never free

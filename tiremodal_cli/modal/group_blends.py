@@ -10,13 +10,13 @@ n = 9 (153.2 Hz) and its alias n = 11 (159.4 Hz), with copies of n = 8 (147.7) a
 0.3 % of a mode.
 
 **Which rows** (:func:`suspect_clusters`): in one order group, rows read with one order n,
-none a split pair's member nor a crowd's row (several orders within a bandwidth: each
-group's row there stands for other orders, another mode at the same frequency), whose
-half-power bands overlap in a chain — three or more of them (one order holds one mode, or a
+none a split pair's member, whose half-power bands overlap in a chain — three or more of them (one order holds one mode, or a
 pair its broken symmetry splits), or two whose relative splitting exceeds
 :data:`~tiremodal_cli.modal.mass_splits.SPLIT_MAX_RATIO` × the median of the test's
 anti-phase pairs (more than a lumped mass splits an order; without three pairs to take a
-median from, two rows are not judged).
+median from, two rows are not judged). A crowd's row (several orders within a bandwidth:
+each group's row there stands for other orders, another mode at the same frequency) counts
+in the chain but is never refitted nor dropped: the cluster is the chain's other rows.
 
 **The model**: the group's rows over the cluster ± :data:`WINDOW_HALF_WIDTHS` half-power
 half-widths; the cluster's poles free; the group's other poles there held where the table has them (a
@@ -47,8 +47,8 @@ where its modes are markedly complex the copies' residues are not imaginary: the
 wrong for them); the window (± 3 half-widths, as :mod:`~tiremodal_cli.modal.pair_refine`),
 the box (1.5 half-widths), the grid's step and the duplicate's quarter half-width (session
 47's guard) are chosen, not tuned. Measured (docs/lsce.md, "Session 51") on the 27 tests whose
-orders mix in eight rulers: spurious 63 → 59, cases over 5 % 9 → 7, found +1, nothing
-mislabelled or lost; on 33 mixed tests no rule was measured on: spurious 72 → 70, the rest
+orders mix in eight rulers: spurious 63 → 58, cases over 5 % 9 → 7, found +1, nothing
+mislabelled or lost; on 33 mixed tests no rule was measured on: spurious 72 → 68, the rest
 unchanged.
 """
 
@@ -94,7 +94,8 @@ MIN_SPARE_LINES = 8
 
 
 def suspect_clusters(freq_hz, half_width_hz, group, classes) -> list[np.ndarray]:
-    """The clusters of rows the module docstring describes (index arrays, by frequency).
+    """The clusters of rows the module docstring describes (index arrays, by frequency: the
+    chain's rows but its crowd rows).
 
     Parameters
     ----------
@@ -107,14 +108,15 @@ def suspect_clusters(freq_hz, half_width_hz, group, classes) -> list[np.ndarray]
               if len(pairs) >= MIN_PAIRS else None)
     out = []
     for g in np.unique(group):
-        rows = sorted((i for i in np.flatnonzero(group == g) if classes[i] is not None and classes[i].pair is None
-                       and not getattr(classes[i], "crowd", False)), key=lambda i: f[i])
+        rows = sorted((i for i in np.flatnonzero(group == g) if classes[i] is not None and classes[i].pair is None),
+                      key=lambda i: f[i])
         for chain in _chains(rows, f, hw):
-            if len({classes[i].n for i in chain}) != 1:
+            free = [i for i in chain if not getattr(classes[i], "crowd", False)]
+            if len({classes[i].n for i in chain}) != 1 or not free:
                 continue
             if len(chain) >= 3 or (median is not None and abs(f[chain[1]] - f[chain[0]])
                                    / (0.5 * (f[chain[0]] + f[chain[1]])) > SPLIT_MAX_RATIO * median):
-                out.append(np.array(chain))
+                out.append(np.array(free))
     return out
 
 
