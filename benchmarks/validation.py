@@ -830,7 +830,7 @@ stiffnesses at GL073A's (`validation.nominal_params`).
 | | | ring | 816 / 831 (98 %) | 6 | 9 | 11 / 1345 (0.8 %) | 0 | 28 / 28 |
 | car, held-out levels (seed 5000) | the same: unchanged | paper | 411 / 413 (100 %) | 0 | 2 | 7 / 572 (1.2 %) | 1 | 11 / 12 |
 | | | ring | 397 / 413 (96 %) | 7 | 9 | 4 / 572 (0.7 %) | 0 | 10 / 12 |
-| car matrix | session 51 (one order's blends in a group refitted with the other orders' modes as real-mode copies, modal.group_blends): unchanged case by case (the pass fires in none of its tests) | paper | 729 / 745 (98 %) | 2 | 14 | 5 / 1146 (0.4 %) | 1 | 25 / 27 |
+| car matrix | session 51 (one order's blends in a group refitted with the other orders' modes as real-mode copies, modal.group_blends): unchanged case by case (no refit kept in its tests) | paper | 729 / 745 (98 %) | 2 | 14 | 5 / 1146 (0.4 %) | 1 | 25 / 27 |
 | | | ring | 816 / 831 (98 %) | 6 | 9 | 11 / 1345 (0.8 %) | 0 | 28 / 28 |
 
 *What the first run found.* Nine of the 17 mislabelled modes were one defect, on tests with
@@ -993,8 +993,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1312 / 1334 (98 %) | 5 / 1864 (0.3 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-12-07, session 50, on an AMD EPYC | where the orders mix, an anti-phase pair split over 2 × the median of the test's pairs loses its weaker member, a blend with another order's copy (modal.mass_splits): spurious −327.52 Hz (ring + mass); the other tests do not reach the rule; and the pairs it leaves refitted with the other groups' copies where their splitting comes nearer the others' (modal.pair_refine): unchanged case by case | paper | 1174 / 1182 (99 %) | 6 / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 8.6 min (`--jobs 2`, other runs beside it) |
 | | | ring | 1312 / 1334 (98 %) | **4** / 1863 (0.2 %) | 0 | 14 / 14 | 14 / 14 | |
-| 2026-12-08, session 51, on an Intel Xeon | where the orders mix, rows of one order in one group split beyond a lumped mass's fraction refitted in the group's rows with the other orders' modes as real-mode copies, a redundant pole dropped (modal.group_blends): the pass fires in none of this matrix's tests — unchanged case by case (the held-out draws' mixed tests: docs/lsce.md, "Session 51") | paper | 1174 / 1182 (99 %) | 6 / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 11.8 min (`--jobs 2`, other runs beside it) |
-| | | ring | 1312 / 1334 (98 %) | 4 / 1863 (0.2 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-12-08, session 51, on an Intel Xeon | where the orders mix, rows of one order in one group split beyond a lumped mass's fraction refitted in the group's rows with the other orders' modes as real-mode copies, a redundant pole dropped (modal.group_blends): spurious −160.56 Hz (ring + mass, refitted to 160.96 Hz beside its group's crowd row); the rest unchanged case by case (the held-out draws' mixed tests: docs/lsce.md, "Session 51") | paper | 1174 / 1182 (99 %) | 6 / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 11.8 min (`--jobs 2`, other runs beside it) |
+| | | ring | 1312 / 1334 (98 %) | **3** / 1863 (0.2 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
