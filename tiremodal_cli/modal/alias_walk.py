@@ -95,15 +95,22 @@ def _contradicted(m: BranchModes, idx: list[int], ns: list[int], others=None) ->
     and the paper's failed-points case's n = 8 same at 147.2 Hz, read as spatial order 2, was
     given n = 2 (its diagnosis's final fit 0.09 → 2.1 % RMS, 8 modes set aside).
 
-    The mode must be clear, or (``others``: the other branches' modes, resolved) clear in
-    its own order group on a test whose orders do not mix (:meth:`BranchModes.clear_in_group`)
-    with its alias contradicted on the other branch as well: a mode weak in the physical
-    FRFs has no branch reading to trust (its tread–sidewall product is mostly its
-    neighbours' misfit; ``classify._other_branch``). Session 38: the ring sidewall shear's
-    n = 1 at 98.32 Hz explains 10 % of the physical response beside the branch's n = 4
-    0.015 Hz away and was read n = 33, though neither branch can hold an order 33 there; a
-    held-out ring with sidewall coupling has a same n = 35 at 418 Hz, 2 % of its band's
-    response, read on the opposite branch, whose alias only that branch contradicts."""
+    The mode must be clear, or (``others``: the other branches' modes, resolved) read
+    surely (both confidences ≥ 0.5) on a test whose orders do not mix, with its alias
+    contradicted on the other branch as well: a mode weak in the physical FRFs has no branch
+    reading to trust (its tread–sidewall product is mostly its neighbours' misfit;
+    ``classify._other_branch``), but where both branches contradict the alias the branch it
+    was read on does not matter, only its order's reading. Session 38: the ring sidewall
+    shear's n = 1 at 98.32 Hz explains 10 % of the physical response beside the branch's
+    n = 4 0.015 Hz away and was read n = 33, though neither branch can hold an order 33
+    there; a held-out ring with sidewall coupling has a same n = 35 at 418 Hz, 2 % of its
+    band's response, read on the opposite branch, whose alias only that branch contradicts.
+    Until session 52 the second round also asked for 30 % of its own group's response
+    (:meth:`BranchModes.clear_in_group`): the car tyre's cavity mode (n = 1 at 218.47 Hz, ζ
+    0.5 %, 3 % of the physical response and 27 % of its group's) was read as the in-phase
+    alias n = 33 below the branch's n = 6 … 17 and every anti-phase order, and, out of the
+    branch's order there, put the branch's n = 20 and 21 out of order too and kept the weak
+    aliases above them off their branch (``classify._other_branch``)."""
     f, reads = m.freq_hz, m.reads
     out = set()
 
@@ -118,7 +125,7 @@ def _contradicted(m: BranchModes, idx: list[int], ns: list[int], others=None) ->
         if m.clear(r):
             if against(r, n_s, idx[i + 1:]):
                 out.add(r)
-        elif others and m.clear_in_group(r) and against(r, n_s, idx[i + 1:]) and against(r, n_s, others):
+        elif others and not m.mixed and m.reads[r].sure and against(r, n_s, idx[i + 1:]) and against(r, n_s, others):
             out.add(r)
     return out
 

@@ -47,7 +47,7 @@ import numpy as np
 
 from tiremodal_cli.conventions import OPPOSITE, SAME
 from tiremodal_cli.modal.alias_walk import BranchModes, Reading, resolve_aliases
-from tiremodal_cli.modal.crowds import crowds
+from tiremodal_cli.modal.crowds import branch_dispersion, crowds
 from tiremodal_cli.modal.misreads import MISREAD_MAX_SIGNIFICANCE
 from tiremodal_cli.modal.spatial import grid_design, grid_points, max_order
 
@@ -138,7 +138,7 @@ def classify(freq_hz, shapes, point_angle, channel_location, significance=None,
                                  mixed=mixed))
     in_order = _in_dispersion_order(freq_hz, reads, ns, significance)
     reads = _partners_branches(freq_hz, reads, ns)
-    reads = _other_branch(freq_hz, reads, ns, in_order, n_p, significance, mixed)
+    reads = _other_branch(freq_hz, reads, ns, in_order, n_p, significance, mixed, damping_ratio)
     pairs = _split_pairs(freq_hz, reads, ns, in_order)
     on_branch = [o.sure and (in_order[r] or ns[r] == o.n_spatial) for r, o in enumerate(reads)]
     crowd = crowds(freq_hz, damping_ratio, ns, [o.n_spatial for o in reads], [o.branch for o in reads],
@@ -227,7 +227,7 @@ def _partners_branches(freq_hz, reads: list[Reading], ns: list[int]) -> list[Rea
 
 
 def _other_branch(freq_hz, reads: list[Reading], ns: list[int], in_order, n_points: int,
-                  significance=None, mixed: bool = False) -> list[Reading]:
+                  significance=None, mixed: bool = False, damping_ratio=None) -> list[Reading]:
     """A mode whose branch cannot be read and that is out of the order of the branch it was
     read on is read on the other branch, when exactly one order of its alias class
     (k N ± n_s, k ≤ 2) fits that branch's dispersion: no clear mode of the branch holds that
@@ -257,7 +257,9 @@ def _other_branch(freq_hz, reads: list[Reading], ns: list[int], in_order, n_poin
     sensors: there a second mode of a held order is no split partner and is dropped as a blend
     (:mod:`~tiremodal_cli.modal.misreads`) — read on the other branch instead, it was kept
     (measured: a held-out car ring's 769.9 Hz row, 0.3 % of the response, became a spurious
-    in-phase n = 45)."""
+    in-phase n = 45).
+    Where several orders fit, the branch's dispersion may pick one (:func:`_by_the_branch`,
+    session 52)."""
     reads = list(reads)
     weak = np.zeros(len(reads), dtype=bool) if significance is None else \
         np.asarray(significance, dtype=float) < MISREAD_MAX_SIGNIFICANCE
@@ -274,10 +276,32 @@ def _other_branch(freq_hz, reads: list[Reading], ns: list[int], in_order, n_poin
                 if all(ns[q] != c for q in clear)
                 and all(freq_hz[q] < freq_hz[r] for q in clear if ns[q] < c)
                 and all(freq_hz[q] > freq_hz[r] for q in clear if ns[q] > c)]
+        if len(fits) > 1 and damping_ratio is not None:
+            fits = _by_the_branch(fits, freq_hz, r, damping_ratio[r], ns, [q for q in clear if in_order[q]], other)
         if len(fits) == 1 and clear:
             reads[r] = replace(o, branch=other)
             ns[r], in_order[r] = fits[0], True
     return reads
+
+
+def _by_the_branch(fits: list[int], freq_hz, r: int, zeta: float, ns, placed: list[int], branch: str) -> list[int]:
+    """Of several orders of an alias class that fit a branch (:func:`_other_branch`; above the
+    branch's highest clear mode every alias fits), the one its dispersion places at the mode:
+    the branch's f(n) from its clear modes in dispersion order
+    (:func:`~tiremodal_cli.modal.crowds.branch_dispersion`) puts that order within the mode's
+    half-power bandwidth 2ζf and every other within none ([that order]; else ``fits``).
+
+    Session 52, the car tyre's membrane + cavity: its in-phase n = 19, 22 … 25 (404–468 Hz,
+    1–4 % of the response, the tread a fiftieth of the sidewall) read "anti-phase" at their
+    spatial orders, out of that branch's order; on the in-phase branch each fit as k·34 ± n_s
+    for two or more k, and each was dropped as a misread. Its dispersion, 9.8 Hz per order
+    above the n = 20 at 414.7 Hz, places n = 22 at 434 Hz (the row: 435.35 Hz) and n = 46
+    some 240 Hz higher."""
+    f_of = branch_dispersion([ns[q] for q in placed], [freq_hz[q] for q in placed], branch)
+    if f_of is None:
+        return fits
+    near = [c for c in fits if abs(f_of(c) - freq_hz[r]) <= 2 * zeta * freq_hz[r]]
+    return near if len(near) == 1 else fits
 
 
 def _split_pairs(freq_hz, reads: list[Reading], ns: list[int], in_order) -> list[tuple]:
