@@ -64,6 +64,8 @@ def guarded_diagram(data, poles_of):
     lines themselves: no impulse responses, no wrap).
     """
     opt = data.opt
+    if data.group >= 0 and data.n_h == 1 and opt.method == "lsce":  # one reference: no shape test (stabilization)
+        opt = replace(opt, stabilization=replace(opt.stabilization, shapes=False))
     b = principal_responses(data.freq, data.rows, None, rtol=opt.rtol_svd)
     d = stabilize(b, poles_of(b), opt.stabilization)
     if not opt.guard or opt.method != "lsce" or not d.selected():

@@ -10,6 +10,20 @@ cluster's median frequency, at most one pole per order; clusters seen at fewer t
 to the cluster's shape below ``cluster_mac``) are rejected as computational. One
 representative per cluster: the member closest to the cluster's median frequency and
 damping. Every decision is kept (``Cluster.reason``) so the choice can be explained.
+
+**An order group of one reference** (a grid's orders 0 and N/2, whose sine column vanishes;
+session 52) is swept without the shape test (``StabilizationOptions.shapes`` off). There a
+pole's shape is its residues in the group's two or three principal responses, fitted at each
+order beside that order's other poles over the whole band; a weak mode's (5–10 × the noise)
+changes from order to order with the poles the sweep spends on the noise beside it, not with
+the mode: the 34-point paper membrane's in-phase n = 51 at 325.7 Hz (group 17) stood within
+0.3 % in frequency and 5 % in damping at 33 of the 39 orders, with MACs of 0.05–0.99 between
+consecutive orders — 6 "stable" poles whose mean MAC to their mean shape was 0.76, rejected as
+inconsistent. Without the shapes, the damping ratio tells two poles of one frequency apart in
+the clustering (a noise pole's damping drifts over the orders: the car ring's 704.7 Hz in its
+group 0, ζ 1.8 → 0.7 % over orders 30–40, six "stable" poles at six scattered orders, pooled
+by frequency alone and adopted — a spurious row). Measured on the matrices: docs/lsce.md,
+"Session 52".
 """
 
 from __future__ import annotations
@@ -37,6 +51,11 @@ class StabilizationOptions:
     cluster_freq: float = 0.01
     cluster_mac: float = 0.9
     min_count: int | None = None  # default: 15 % of the orders swept, at least 3
+    #: False: no shape test — the poles alone decide (as with one-component shapes), and a
+    #: pole joins a cluster only where its damping ratio agrees with the cluster's mean within
+    #: ``tol_damping`` (what the stability test asks of two orders). For an order group of one
+    #: reference (:func:`~tiremodal_cli.modal.guard.guarded_diagram`): module doc.
+    shapes: bool = True
 
 
 @dataclass
@@ -175,7 +194,8 @@ def stabilize(band: Band, sweep_result: list[OrderPoles], opt: StabilizationOpti
         idx = _candidates(op, band, opt.zeta_max)
         # poly-reference poles carry participation vectors: those tell the members of a
         # split pair apart where a shape fitted per order would mix them
-        shapes = op.participation[idx] if op.participation is not None else _shapes(band, op.s[idx])
+        shapes = (op.participation[idx] if op.participation is not None else _shapes(band, op.s[idx])
+                  if opt.shapes else np.ones((len(idx), 1), dtype=complex))
         status = _statuses(op, idx, shapes, prev, opt)
         cur = [StablePole(op.order, complex(op.s[i]), float(op.freq_hz[i]), float(op.damping_ratio[i]),
                           shapes[k], status[k], None if op.participation is None else op.participation[i])
@@ -232,6 +252,7 @@ def _cluster(stable, opt):
     clusters: list[Cluster] = []
     means: list[np.ndarray] = []
     f_mean = []  # running mean frequency of each cluster (a cheap stand-in for the median)
+    z_mean = []  # and damping ratio: with no shapes (``opt.shapes`` off) it is what tells poles apart
     for p in sorted(stable, key=lambda q: (q.freq_hz, q.order)):
         best, best_mac = None, opt.cluster_mac
         fm = np.asarray(f_mean)
@@ -241,7 +262,7 @@ def _cluster(stable, opt):
         best_key = (best_mac - 1e-9, -np.inf)
         for ci in near:
             c = clusters[ci]
-            if p.order in c.orders:
+            if p.order in c.orders or (not opt.shapes and abs(p.damping_ratio - z_mean[ci]) > opt.tol_damping * z_mean[ci]):
                 continue
             key = (round(mac(means[ci], p.shape), 9), -abs(fm[ci] - p.freq_hz))
             if key > best_key:
@@ -251,11 +272,13 @@ def _cluster(stable, opt):
             clusters[-1].orders = {p.order}
             means.append(p.shape.copy())
             f_mean.append(p.freq_hz)
+            z_mean.append(p.damping_ratio)
         else:
             c = clusters[best]
             ph = np.vdot(p.shape, means[best])
             means[best] = means[best] + p.shape * (np.conj(ph) / abs(ph) if abs(ph) > 0 else 1)
             f_mean[best] += (p.freq_hz - f_mean[best]) / (len(c.members) + 1)
+            z_mean[best] += (p.damping_ratio - z_mean[best]) / (len(c.members) + 1)
             c.members.append(p)
             c.orders.add(p.order)
     return clusters
