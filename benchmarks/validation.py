@@ -832,6 +832,10 @@ stiffnesses at GL073A's (`validation.nominal_params`).
 | | | ring | 397 / 413 (96 %) | 7 | 9 | 4 / 572 (0.7 %) | 0 | 10 / 12 |
 | car matrix | session 51 (one order's blends in a group refitted with the other orders' modes as real-mode copies, modal.group_blends): unchanged case by case (no refit kept in its tests) | paper | 729 / 745 (98 %) | 2 | 14 | 5 / 1146 (0.4 %) | 1 | 25 / 27 |
 | | | ring | 816 / 831 (98 %) | 6 | 9 | 11 / 1345 (0.8 %) | 0 | 28 / 28 |
+| car matrix | session 52 (weak aliases read by the branch's dispersion; a cavity mode's alias both branches contradict; one-reference order groups without the shape test): the paper membrane + cavity's in-phase n = 19, 22 … 25 no longer dropped as misreads; the ring coupling + mass loses its added-mass diagnosis (its breathing mode now 100.94 Hz against the truth's 100.93, was 101.06: docs/lsce.md, "Session 52") | paper | **734** / 745 (99 %) | 3 | **8** | 5 / 1158 (0.4 %) | 1 | 25 / 27 |
+| | | ring | **818** / 831 (98 %) | 5 | **8** | 11 / 1349 (0.8 %) | 0 | **27** / 28 |
+| car, held-out levels (seed 5000) | session 52: the 60-point ring's in-phase n = 25, 27, 28 read on their branch, n = 30 found; the 20-point ring's extensible + coupling loses its extensible belt (two more aliased rows reach identify: docs/lsce.md, "Session 52") | paper | 411 / 413 (100 %) | 0 | 2 | 7 / 572 (1.2 %) | 1 | 11 / 12 |
+| | | ring | **401** / 413 (97 %) | **4** | **8** | 4 / 577 (0.7 %) | 0 | **9** / 12 |
 
 *What the first run found.* Nine of the 17 mislabelled modes were one defect, on tests with
 nothing the truck's matrix lacks (1,024 Hz, 40 points, receptance, faults, the cavity): a
@@ -995,6 +999,8 @@ Earlier scorecards of the same matrix, totals only (their per-case records were 
 | | | ring | 1312 / 1334 (98 %) | **4** / 1863 (0.2 %) | 0 | 14 / 14 | 14 / 14 | |
 | 2026-12-08, session 51, on an Intel Xeon | where the orders mix, rows of one order in one group split beyond a lumped mass's fraction refitted in the group's rows with the other orders' modes as real-mode copies, a redundant pole dropped (modal.group_blends): spurious −160.56 Hz (ring + mass, refitted to 160.96 Hz beside its group's crowd row); the rest unchanged case by case (the held-out draws' mixed tests: docs/lsce.md, "Session 51") | paper | 1174 / 1182 (99 %) | 6 / 1697 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 11.8 min (`--jobs 2`, other runs beside it) |
 | | | ring | 1312 / 1334 (98 %) | **3** / 1863 (0.2 %) | 0 | 14 / 14 | 14 / 14 | |
+| 2026-12-08, session 52, on an AMD EPYC | an order group of one reference (orders 0 and N/2) clustered by frequency and damping without the shape test (stabilization `shapes`); weak aliases read on the other branch by its dispersion where several orders fit, and a surely read mode whose alias both branches contradict keeps its order (classify, alias_walk): the paper membrane's n = 51 and the ring coupling + mass's n = 34 found, the ring's aliased rows read right 430 → 443 of 443 (docs/lsce.md, "Session 52") | paper | **1175** / 1182 (99 %) | 6 / 1700 (0.4 %) | 0 | 14 / 14 | 13 / 13 | 6.2 min (`--jobs 2`) |
+| | | ring | **1313** / 1334 (98 %) | 3 / 1865 (0.2 %) | 0 | 14 / 14 | 14 / 14 | |
 """
 
 
